@@ -1,0 +1,27 @@
+#include <spdlog/spdlog.h>
+
+#include <iostream>
+
+#include "app/commands.hpp"
+#include "score/scorer.hpp"
+
+namespace pipeloc::app {
+
+void add_score(CLI::App& app) {
+  struct Options {
+    std::string dataset, results, json;
+  };
+  auto opt = std::make_shared<Options>();
+  auto* cmd = app.add_subcommand("score", "Score BOP results against a dataset's ground truth (DESIGN.md scoring)");
+  cmd->add_option("--dataset", opt->dataset, "BOP dataset directory")->required();
+  cmd->add_option("--results", opt->results, "results CSV")->required();
+  cmd->add_option("--json", opt->json, "also write the figures as JSON here");
+  cmd->callback([opt] {
+    const ResultsFile results = read_results_csv(opt->results);
+    const ScoreReport report = score_results(opt->dataset, results);
+    std::cout << format_report(report);
+    if (!opt->json.empty()) write_json(opt->json, report_to_json(report));
+  });
+}
+
+}  // namespace pipeloc::app

@@ -1,0 +1,16 @@
+// Each subcommand registers itself on the CLI; its callback throws on bad input at start-up
+// and main() turns that into one clear message and a non-zero exit.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+namespace pipeloc::app {
+
+void add_make_pipe(CLI::App& app);
+void add_simulate(CLI::App& app);
+void add_score(CLI::App& app);
+
+// Exit status a callback asks for (0 unless set).
+int& exit_status();
+
+}  // namespace pipeloc::app

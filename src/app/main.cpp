@@ -1,0 +1,30 @@
+// pipeloc: localize freely curved pipes in a bin and hand the best pick to a PLC.
+#include <spdlog/spdlog.h>
+
+#include <exception>
+
+#include "app/commands.hpp"
+
+namespace pipeloc::app {
+int& exit_status() {
+  static int status = 0;
+  return status;
+}
+}  // namespace pipeloc::app
+
+int main(int argc, char** argv) {
+  CLI::App app{"pipeloc: pipe localization for bin picking (see README.md)"};
+  app.require_subcommand(1);
+  pipeloc::app::add_make_pipe(app);
+  pipeloc::app::add_simulate(app);
+  pipeloc::app::add_score(app);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  } catch (const std::exception& e) {
+    spdlog::error("{}", e.what());
+    return 2;
+  }
+  return pipeloc::app::exit_status();
+}

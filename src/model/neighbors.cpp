@@ -1,0 +1,46 @@
+#include "model/neighbors.hpp"
+
+#include <flann/flann.hpp>
+
+namespace pipeloc {
+
+struct KdTree3::Impl {
+  std::unique_ptr<flann::Index<flann::L2_Simple<float>>> index;
+};
+
+KdTree3::KdTree3() : impl_(std::make_unique<Impl>()) {}
+KdTree3::~KdTree3() = default;
+
+void KdTree3::build(const Eigen::Vector3f* points, std::size_t count) {
+  count_ = count;
+  impl_->index.reset();
+  if (count == 0) return;  // FLANN cannot index an empty matrix
+  // Eigen::Vector3f is three packed floats, so the buffer is a count x 3 row-major matrix.
+  flann::Matrix<float> data(const_cast<float*>(points[0].data()), count, 3);
+  impl_->index = std::make_unique<flann::Index<flann::L2_Simple<float>>>(
+      data, flann::KDTreeSingleIndexParams(10));
+  impl_->index->buildIndex();
+}
+
+bool KdTree3::nearest(const Eigen::Vector3f& query, int* index, float* dist_sq, int checks) const {
+  if (!impl_->index) return false;
+  flann::Matrix<float> q(const_cast<float*>(query.data()), 1, 3);
+  flann::Matrix<int> idx(index, 1, 1);
+  flann::Matrix<float> dst(dist_sq, 1, 1);
+  flann::SearchParams params(checks <= 0 ? flann::FLANN_CHECKS_UNLIMITED : checks);
+  return impl_->index->knnSearch(q, idx, dst, 1, params) == 1;
+}
+
+int KdTree3::radius(const Eigen::Vector3f& query, float radius_mm, int* indices, float* dists_sq,
+                    int max_results) const {
+  if (!impl_->index || max_results <= 0) return 0;
+  flann::Matrix<float> q(const_cast<float*>(query.data()), 1, 3);
+  flann::Matrix<int> idx(indices, 1, std::size_t(max_results));
+  flann::Matrix<float> dst(dists_sq, 1, std::size_t(max_results));
+  flann::SearchParams params(flann::FLANN_CHECKS_UNLIMITED);
+  params.max_neighbors = max_results;
+  params.sorted = true;
+  return impl_->index->radiusSearch(q, idx, dst, radius_mm * radius_mm, params);
+}
+
+}  // namespace pipeloc

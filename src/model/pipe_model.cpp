@@ -1,0 +1,192 @@
+#include "model/pipe_model.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+#include "model/neighbors.hpp"
+#include "model/stl.hpp"
+
+namespace pipeloc {
+namespace {
+
+// Möller–Trumbore; returns distance along dir or -1.
+float ray_triangle(const Eigen::Vector3f& o, const Eigen::Vector3f& d, const Eigen::Vector3f& a,
+                   const Eigen::Vector3f& b, const Eigen::Vector3f& c) {
+  const Eigen::Vector3f e1 = b - a, e2 = c - a;
+  const Eigen::Vector3f p = d.cross(e2);
+  const float det = e1.dot(p);
+  if (std::abs(det) < 1e-12f) return -1;
+  const float inv = 1.0f / det;
+  const Eigen::Vector3f s = o - a;
+  const float u = s.dot(p) * inv;
+  if (u < -1e-6f || u > 1 + 1e-6f) return -1;
+  const Eigen::Vector3f q = s.cross(e1);
+  const float v = d.dot(q) * inv;
+  if (v < -1e-6f || u + v > 1 + 1e-6f) return -1;
+  return e2.dot(q) * inv;
+}
+
+}  // namespace
+
+std::vector<Eigen::Vector3f> compute_vertex_normals(const Mesh& mesh) {
+  std::vector<Eigen::Vector3f> normals(mesh.vertices.size(), Eigen::Vector3f::Zero());
+  for (std::size_t f = 0; f < mesh.faces.size(); ++f) {
+    const auto& t = mesh.faces[f];
+    const Eigen::Vector3f n = mesh.face_normal(f) * mesh.face_area(f);
+    for (int k = 0; k < 3; ++k) normals[t[k]] += n;
+  }
+  for (auto& n : normals) {
+    const float len = n.norm();
+    if (len > 0) n /= len;
+  }
+  return normals;
+}
+
+SurfaceSamples sample_surface(const Mesh& mesh, const std::vector<Eigen::Vector3f>& vn, int count,
+                              unsigned seed) {
+  std::vector<double> cumulative(mesh.faces.size());
+  double sum = 0;
+  for (std::size_t f = 0; f < mesh.faces.size(); ++f) cumulative[f] = sum += mesh.face_area(f);
+  SurfaceSamples out;
+  if (sum <= 0 || count <= 0) return out;
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  out.points.reserve(count);
+  out.normals.reserve(count);
+  for (int i = 0; i < count; ++i) {
+    const double pick = uniform(rng) * sum;
+    const std::size_t f = std::min<std::size_t>(
+        std::lower_bound(cumulative.begin(), cumulative.end(), pick) - cumulative.begin(),
+        mesh.faces.size() - 1);
+    double u = uniform(rng), v = uniform(rng);
+    if (u + v > 1) u = 1 - u, v = 1 - v;
+    const auto& t = mesh.faces[f];
+    const float w0 = float(1 - u - v), w1 = float(u), w2 = float(v);
+    out.points.push_back(w0 * mesh.vertices[t[0]] + w1 * mesh.vertices[t[1]] +
+                         w2 * mesh.vertices[t[2]]);
+    Eigen::Vector3f n = w0 * vn[t[0]] + w1 * vn[t[1]] + w2 * vn[t[2]];
+    if (n.norm() < 1e-6f) n = mesh.face_normal(f);
+    out.normals.push_back(n.normalized());
+  }
+  return out;
+}
+
+float measure_tube_diameter(const Mesh& mesh, const std::vector<Eigen::Vector3f>& vn) {
+  // On a swept tube the inward normal of a wall vertex passes through the centreline and meets
+  // the opposite wall one diameter away; end caps and ring edges give outliers, hence the median.
+  const std::size_t stride = std::max<std::size_t>(1, mesh.vertices.size() / 400);
+  std::vector<float> widths;
+  for (std::size_t i = 0; i < mesh.vertices.size(); i += stride) {
+    const Eigen::Vector3f d = -vn[i];
+    if (d.norm() < 0.5f) continue;
+    const Eigen::Vector3f o = mesh.vertices[i] + 1e-3f * d;
+    float best = -1;
+    for (const auto& t : mesh.faces) {
+      const float hit = ray_triangle(o, d, mesh.vertices[t[0]], mesh.vertices[t[1]], mesh.vertices[t[2]]);
+      if (hit > 1e-3f && (best < 0 || hit < best)) best = hit;
+    }
+    if (best > 0) widths.push_back(best + 1e-3f);
+  }
+  if (widths.empty()) return 0;
+  std::nth_element(widths.begin(), widths.begin() + widths.size() / 2, widths.end());
+  return widths[widths.size() / 2];
+}
+
+float longest_extent(const std::vector<Eigen::Vector3f>& v) {
+  float best = 0;
+  for (std::size_t i = 0; i < v.size(); ++i)
+    for (std::size_t j = i + 1; j < v.size(); ++j) best = std::max(best, (v[i] - v[j]).squaredNorm());
+  return std::sqrt(best);
+}
+
+std::vector<Pose> find_symmetries(const SurfaceSamples& surface, const Eigen::Vector3f& centroid,
+                                  float tolerance_mm) {
+  // A rigid symmetry fixes the surface centroid and maps principal axes onto principal axes; with
+  // distinct principal moments the only proper candidates are half-turns about each axis.
+  std::vector<Pose> found;
+  if (surface.points.size() < 10) return found;
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (const auto& p : surface.points) {
+    const Eigen::Vector3d d = (p - centroid).cast<double>();
+    cov += d * d.transpose();
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov / double(surface.points.size()));
+  KdTree3 tree;
+  tree.build(surface.points.data(), surface.points.size());
+  // Sampling noise tilts the principal axes by a degree or so: refine each candidate with a few
+  // closest-point iterations (Umeyama fit) before judging it.
+  const std::size_t stride = std::max<std::size_t>(1, surface.points.size() / 3000);
+  Eigen::Matrix3Xd src(3, (surface.points.size() + stride - 1) / stride), dst(3, src.cols());
+  for (int axis = 0; axis < 3; ++axis) {
+    const Eigen::Vector3d a = eig.eigenvectors().col(axis);
+    Eigen::Matrix4f m = Eigen::Matrix4f::Identity();
+    Pose half_turn = Pose::Identity();
+    half_turn.linear() = Eigen::AngleAxisd(M_PI, a).toRotationMatrix();
+    half_turn.translation() = centroid.cast<double>() - half_turn.linear() * centroid.cast<double>();
+    m = half_turn.matrix().cast<float>();
+    bool fits = true;
+    for (int iter = 0; iter <= 5 && fits; ++iter) {
+      float worst_plane = 0;
+      for (Eigen::Index c = 0; c < src.cols(); ++c) {
+        const Eigen::Vector3f& p = surface.points[std::size_t(c) * stride];
+        const Eigen::Vector3f q = m.topLeftCorner<3, 3>() * p + m.topRightCorner<3, 1>();
+        int idx = 0;
+        float d2 = 0;
+        tree.nearest(q, &idx, &d2, 64);
+        src.col(c) = p.cast<double>();
+        dst.col(c) = surface.points[idx].cast<double>();
+        // Point-to-plane: the gap between samples is not a departure from the surface.
+        worst_plane = std::max(worst_plane, std::abs((q - surface.points[idx]).dot(surface.normals[idx])));
+        if (d2 > 16 * tolerance_mm * tolerance_mm) fits = false;
+      }
+      if (iter == 5) fits = fits && worst_plane <= tolerance_mm;
+      else if (fits) m = Eigen::umeyama(src, dst, false).cast<float>();
+    }
+    if (!fits) continue;
+    Pose refined = Pose::Identity();
+    refined.matrix() = m.cast<double>();
+    refined.linear() = nearest_rotation(refined.linear());
+    // A refinement that slid to the identity is not a symmetry.
+    if (rotation_angle_deg(Eigen::Matrix3d::Identity(), refined.linear()) > 90) found.push_back(refined);
+  }
+  return found;
+}
+
+void orient_outward(Mesh* mesh) {
+  // Exporters disagree on winding; a closed surface wound outward encloses positive volume.
+  double volume6 = 0;
+  const Eigen::Vector3f ref = mesh->vertices[0];
+  for (const auto& t : mesh->faces)
+    volume6 += double((mesh->vertices[t[0]] - ref).dot((mesh->vertices[t[1]] - ref).cross(mesh->vertices[t[2]] - ref)));
+  if (volume6 < 0)
+    for (auto& t : mesh->faces) std::swap(t[1], t[2]);
+}
+
+PipeModel derive_pipe_model(Mesh mesh, const std::string& source, const ModelDerivation& params) {
+  PipeModel model;
+  model.source = source;
+  model.mesh = std::move(mesh);
+  if (model.mesh.faces.empty()) throw ModelError("model '" + source + "': mesh has no triangles");
+  orient_outward(&model.mesh);
+  model.vertex_normals = compute_vertex_normals(model.mesh);
+  const float area = model.mesh.surface_area();
+  const int count = std::clamp(int(area * params.samples_per_mm2), 100, params.max_samples);
+  model.surface = sample_surface(model.mesh, model.vertex_normals, count, params.seed);
+  for (const auto& p : model.surface.points) model.centroid += p;
+  model.centroid /= float(model.surface.points.size());
+  model.tube_diameter_mm = measure_tube_diameter(model.mesh, model.vertex_normals);
+  model.extent_mm = longest_extent(model.mesh.vertices);
+  if (!(model.tube_diameter_mm > 0) || model.tube_diameter_mm >= model.extent_mm)
+    throw ModelError("model '" + source + "': cannot measure a tube diameter (is it a closed tube?)");
+  model.symmetry_tolerance_mm = params.symmetry_tolerance_of_diameter * model.tube_diameter_mm;
+  model.symmetries = find_symmetries(model.surface, model.centroid, model.symmetry_tolerance_mm);
+  return model;
+}
+
+PipeModel load_pipe_model(const std::string& stl_path, const ModelDerivation& params) {
+  return derive_pipe_model(read_stl(stl_path), stl_path, params);
+}
+
+}  // namespace pipeloc

@@ -1,0 +1,55 @@
+// What the localizer needs to know about a pipe, derived from its mesh alone (DESIGN: "Model
+// inputs (tube diameter, longest extent L) are derived from the STL itself").
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "core/pose.hpp"
+#include "model/mesh.hpp"
+
+namespace pipeloc {
+
+struct SurfaceSamples {
+  std::vector<Eigen::Vector3f> points;   // model frame, mm
+  std::vector<Eigen::Vector3f> normals;  // outward, unit
+};
+
+struct PipeModel {
+  std::string source;  // file or preset it came from
+  Mesh mesh;
+  std::vector<Eigen::Vector3f> vertex_normals;
+  SurfaceSamples surface;          // about one sample per mm^2
+  float tube_diameter_mm = 0;      // R of the paper
+  float extent_mm = 0;             // L of the paper: longest distance between two vertices
+  Eigen::Vector3f centroid = Eigen::Vector3f::Zero();  // of the surface
+  std::vector<Pose> symmetries;    // proper rotations other than identity mapping the surface onto itself
+  float symmetry_tolerance_mm = 0;
+};
+
+struct ModelDerivation {
+  float samples_per_mm2 = 1.0f;
+  int max_samples = 40000;
+  unsigned seed = 1;
+  // A candidate rotation is a symmetry when no surface sample lands further than this from the
+  // surface; as a share of the tube diameter (so it scales with the part).
+  float symmetry_tolerance_of_diameter = 0.08f;
+};
+
+PipeModel derive_pipe_model(Mesh mesh, const std::string& source, const ModelDerivation& = {});
+PipeModel load_pipe_model(const std::string& stl_path, const ModelDerivation& = {});
+
+// Area-weighted surface samples with interpolated vertex normals, deterministic for a seed.
+SurfaceSamples sample_surface(const Mesh& mesh, const std::vector<Eigen::Vector3f>& vertex_normals,
+                              int count, unsigned seed);
+std::vector<Eigen::Vector3f> compute_vertex_normals(const Mesh& mesh);
+// Flips the winding if the surface encloses negative volume, so face normals point outward.
+void orient_outward(Mesh* mesh);
+
+// Median distance from a vertex straight through the tube to the opposite wall.
+float measure_tube_diameter(const Mesh& mesh, const std::vector<Eigen::Vector3f>& vertex_normals);
+float longest_extent(const std::vector<Eigen::Vector3f>& vertices);
+std::vector<Pose> find_symmetries(const SurfaceSamples& surface, const Eigen::Vector3f& centroid,
+                                  float tolerance_mm);
+
+}  // namespace pipeloc

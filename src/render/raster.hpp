@@ -1,0 +1,42 @@
+// Triangle rasterization into depth images: the camera's pinhole view (simulator, model
+// outlines) and a top-down height map (pile building). One scan-conversion serves both.
+#pragma once
+
+#include "core/camera.hpp"
+#include "core/image.hpp"
+#include "model/mesh.hpp"
+
+namespace pipeloc {
+
+struct DepthTarget {
+  Image<float> z_mm;               // along the optical axis; 0 where nothing was drawn
+  Image<int> label;                // -1 where nothing was drawn
+  Image<Eigen::Vector3f> normal;   // unit face normal in camera frame (towards the camera)
+
+  void reset(int width, int height);
+};
+
+// Draws the mesh at model_to_cam, keeping the nearest surface per pixel centre.
+// Returns the number of pixels this mesh won.
+int render_perspective(const Mesh& mesh, const Pose& model_to_cam, const Intrinsics& k, int label,
+                       DepthTarget* target);
+
+// A height map over the world XY plane: cell (i, j) has centre (origin + i*cell, origin + j*cell).
+struct HeightMap {
+  double origin_x_mm = 0, origin_y_mm = 0, cell_mm = 2;
+  Image<float> z_mm;
+
+  Eigen::Vector2d to_cell(double x, double y) const {
+    return {(x - origin_x_mm) / cell_mm, (y - origin_y_mm) / cell_mm};
+  }
+  // Height at a world point (nearest cell); `outside` when off the map.
+  float at(double x, double y, float outside) const;
+};
+
+enum class Envelope { top, bottom };
+
+// Draws the mesh at model_to_world into the map, keeping the highest (top) or lowest (bottom)
+// surface per cell. Cells the mesh does not cover keep their value.
+void render_height(const Mesh& mesh, const Pose& model_to_world, Envelope which, HeightMap* map);
+
+}  // namespace pipeloc

@@ -1,0 +1,32 @@
+// A pile of identical pipes dropped one after another into a bin (world frame: origin at the
+// centre of the bin floor, Z up). Contact is resolved on a height map of what lies below, so
+// no pipe passes into another; each dropped pipe then tilts about horizontal axes while that
+// lowers it, so pipes come to rest leaning on one another.
+#pragma once
+
+#include <random>
+#include <vector>
+
+#include "model/pipe_model.hpp"
+
+namespace pipeloc {
+
+struct BinSpec {
+  double inner_x_mm = 640, inner_y_mm = 480;
+  double wall_height_mm = 150, wall_thickness_mm = 15;
+};
+
+struct PileParams {
+  int pipes = 20;
+  BinSpec bin;
+  double cell_mm = 2.0;        // height-map resolution for contact
+  double max_settle_deg = 10;  // largest tilt step tried while settling
+  double drop_spread = 0.6;    // pipes are dropped over this share of the bin's width and length
+};
+
+std::vector<Pose> build_pile(const PipeModel& model, const PileParams& params, std::mt19937& rng);
+
+// The bin as a mesh in the world frame: floor and four walls.
+Mesh make_bin_mesh(const BinSpec& bin);
+
+}  // namespace pipeloc

@@ -1,0 +1,99 @@
+#include "sim/scene.hpp"
+
+#include <cmath>
+
+namespace pipeloc {
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+
+// Camera above the bin looking down at its centre, tilted by `tilt_deg` towards `azimuth`.
+Pose draw_camera(const SceneParams& p, std::mt19937& rng) {
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  const double height = p.camera_height_min_mm + uniform(rng) * (p.camera_height_max_mm - p.camera_height_min_mm);
+  const double tilt = uniform(rng) * p.max_tilt_deg * kDeg;
+  const double azimuth = uniform(rng) * 2 * M_PI;
+  const Eigen::Vector3d look_at((uniform(rng) - 0.5) * 2 * p.camera_offset_mm,
+                                (uniform(rng) - 0.5) * 2 * p.camera_offset_mm, 0);
+  // Camera axes in the world: z looks down (tilted), x along world x as far as possible.
+  const Eigen::Vector3d down(std::sin(tilt) * std::cos(azimuth), std::sin(tilt) * std::sin(azimuth), -std::cos(tilt));
+  const Eigen::Vector3d centre = look_at - down * (height / std::cos(tilt));
+  Eigen::Vector3d x_axis = Eigen::Vector3d::UnitX() - down * down.x();
+  x_axis.normalize();
+  const Eigen::Vector3d y_axis = down.cross(x_axis);
+  Eigen::Matrix3d cam_to_world;
+  cam_to_world.col(0) = x_axis;
+  cam_to_world.col(1) = y_axis;
+  cam_to_world.col(2) = down;
+  Pose world_to_cam = Pose::Identity();
+  world_to_cam.linear() = cam_to_world.transpose();
+  world_to_cam.translation() = -cam_to_world.transpose() * centre;
+  return world_to_cam;
+}
+
+void render_all(const PipeModel& model, const Mesh& bin, const std::vector<Pose>& poses,
+                const Pose& world_to_cam, const Intrinsics& k, DepthTarget* target) {
+  target->reset(k.width, k.height);
+  render_perspective(bin, world_to_cam, k, int(poses.size()), target);
+  for (std::size_t i = 0; i < poses.size(); ++i)
+    render_perspective(model.mesh, world_to_cam * poses[i], k, int(i), target);
+}
+
+}  // namespace
+
+std::vector<GtInfo> visibility_info(const PipeModel& model, const SimulatedScene& scene) {
+  const int n = int(scene.model_to_world.size());
+  std::vector<GtInfo> info(n);
+  DepthTarget alone;
+  for (int i = 0; i < n; ++i) {
+    alone.reset(scene.camera.intrinsics.width, scene.camera.intrinsics.height);
+    render_perspective(model.mesh, scene.model_to_cam(i), scene.camera.intrinsics, i, &alone);
+    int all = 0, visib = 0, valid = 0, by_pipes = 0;
+    for (std::size_t p = 0; p < alone.label.pixels.size(); ++p) {
+      if (alone.label.pixels[p] != i) continue;
+      ++all;
+      const int front = scene.clean.label.pixels[p];
+      if (front == i) {
+        ++visib;
+        if (scene.depth_mm.pixels[p] > 0) ++valid;
+      } else if (front >= 0 && front < n) {
+        ++by_pipes;
+      }
+    }
+    GtInfo& g = info[i];
+    g.px_count_all = all;
+    g.px_count_visib = visib;
+    g.px_count_valid = valid;
+    g.visib_fract = all ? double(visib) / all : 0.0;
+    g.occ_by_pipes = all ? double(by_pipes) / all : 1.0;
+    // DESIGN.md: a top pipe is at most 5 % covered by pipes and at least 40 % validly seen.
+    g.top = all > 0 && g.occ_by_pipes <= 0.05 && double(valid) / all >= 0.40;
+  }
+  return info;
+}
+
+SimulatedScene render_scene(const PipeModel& model, std::vector<Pose> model_to_world,
+                            const SceneParams& params, std::mt19937& rng) {
+  SimulatedScene scene;
+  scene.model_to_world = std::move(model_to_world);
+  scene.camera.intrinsics = params.intrinsics;
+  scene.camera.depth_scale = 1.0;
+  scene.camera.world_to_cam = draw_camera(params, rng);
+  const Mesh bin = make_bin_mesh(params.pile.bin);
+  render_all(model, bin, scene.model_to_world, *scene.camera.world_to_cam, params.intrinsics, &scene.clean);
+  // The projector sits beside the camera: its view is the camera's shifted along camera x.
+  Pose world_to_projector = *scene.camera.world_to_cam;
+  world_to_projector.translation().x() -= params.sensor.baseline_mm;
+  DepthTarget projector;
+  render_all(model, bin, scene.model_to_world, world_to_projector, params.intrinsics, &projector);
+  scene.depth_mm = apply_sensor_model(scene.clean, projector, params.intrinsics, params.sensor,
+                                      int(scene.model_to_world.size()), rng);
+  scene.info = visibility_info(model, scene);
+  return scene;
+}
+
+SimulatedScene simulate_scene(const PipeModel& model, const SceneParams& params, std::mt19937& rng) {
+  return render_scene(model, build_pile(model, params.pile, rng), params, rng);
+}
+
+}  // namespace pipeloc

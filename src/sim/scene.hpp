@@ -1,0 +1,42 @@
+// One simulated frame: a pile in a bin seen by the sensor model, with its ground truth.
+#pragma once
+
+#include <random>
+#include <vector>
+
+#include "io/bop.hpp"
+#include "sim/pile.hpp"
+#include "sim/sensor.hpp"
+
+namespace pipeloc {
+
+struct SceneParams {
+  PileParams pile;
+  SensorModel sensor;
+  Intrinsics intrinsics;
+  double camera_height_min_mm = 980, camera_height_max_mm = 1080;  // above the bin floor
+  double max_tilt_deg = 0;           // camera tilt from vertical, drawn in [0, max]
+  double camera_offset_mm = 25;      // camera drawn this far off the bin centre at most
+};
+
+struct SimulatedScene {
+  CameraInfo camera;                  // world_to_cam always set
+  std::vector<Pose> model_to_world;   // one per pipe
+  Image<float> depth_mm;              // what the sensor reports (0 = no reading)
+  DepthTarget clean;                  // noise-free render: depth, label, normal
+  std::vector<GtInfo> info;           // one per pipe
+
+  Pose model_to_cam(std::size_t i) const { return *camera.world_to_cam * model_to_world[i]; }
+};
+
+// Draws a camera and renders the given pile through the sensor model.
+SimulatedScene render_scene(const PipeModel& model, std::vector<Pose> model_to_world,
+                            const SceneParams& params, std::mt19937& rng);
+
+// A new pile and a frame of it.
+SimulatedScene simulate_scene(const PipeModel& model, const SceneParams& params, std::mt19937& rng);
+
+// Visibility figures of DESIGN.md's scoring: silhouettes of each pipe alone vs. the full scene.
+std::vector<GtInfo> visibility_info(const PipeModel& model, const SimulatedScene& scene);
+
+}  // namespace pipeloc

@@ -1,0 +1,114 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "model/make_pipe.hpp"
+#include "model/neighbors.hpp"
+#include "model/pipe_model.hpp"
+
+namespace pipeloc {
+namespace {
+
+TEST(PipeModel, StraightTubeDiameterAndExtent) {
+  PipeSpec spec;
+  spec.diameter_mm = 20;
+  spec.segments = parse_centreline("S100");
+  const PipeModel m = derive_pipe_model(make_pipe(spec), "straight");
+  EXPECT_NEAR(m.tube_diameter_mm, 20.0, 0.05);
+  EXPECT_NEAR(m.extent_mm, std::hypot(100.0, 20.0), 0.05);  // corner to opposite corner
+}
+
+TEST(PipeModel, PresetsMeasureTheirDiameterWhateverTheWinding) {
+  for (const char* name : {"sbend", "u", "torus"}) {
+    const PipeSpec spec = pipe_preset(name);
+    Mesh mesh = make_pipe(spec);
+    for (auto& f : mesh.faces) std::swap(f[1], f[2]);  // inward winding, as some exporters write
+    const PipeModel m = derive_pipe_model(mesh, name);
+    EXPECT_NEAR(m.tube_diameter_mm, spec.diameter_mm, 0.05) << name;
+    EXPECT_GT(m.extent_mm, 100) << name;
+    // Normals point out of the tube: one diameter against the normal lies the opposite wall.
+    KdTree3 tree;
+    tree.build(m.surface.points.data(), m.surface.points.size());
+    int checked = 0, opposite_wall = 0;
+    for (std::size_t i = 0; i < m.surface.points.size(); i += 25, ++checked) {
+      int idx;
+      float d2;
+      tree.nearest(m.surface.points[i] - m.surface.normals[i] * float(spec.diameter_mm), &idx, &d2);
+      opposite_wall += d2 < 1.5f * 1.5f;
+    }
+    EXPECT_GT(opposite_wall, checked * 9 / 10) << name;
+  }
+}
+
+TEST(PipeModel, TorusLikePipeHasOneHalfTurnSymmetryAndSBendNone) {
+  const PipeModel torus = derive_pipe_model(make_pipe(pipe_preset("torus")), "torus");
+  ASSERT_EQ(torus.symmetries.size(), 1u);
+  const Pose& s = torus.symmetries[0];
+  EXPECT_NEAR(rotation_angle_deg(Eigen::Matrix3d::Identity(), s.linear()), 180.0, 0.5);
+  // It maps every vertex onto the surface.
+  const Mesh& mesh = torus.mesh;
+  KdTree3 tree;
+  tree.build(torus.surface.points.data(), torus.surface.points.size());
+  for (std::size_t i = 0; i < mesh.vertices.size(); i += 7) {
+    int idx;
+    float d2;
+    ASSERT_TRUE(tree.nearest((s.cast<float>() * mesh.vertices[i]), &idx, &d2));
+    EXPECT_LT(std::sqrt(d2), 2.0f);
+  }
+  const PipeModel sbend = derive_pipe_model(make_pipe(pipe_preset("sbend")), "sbend");
+  EXPECT_TRUE(sbend.symmetries.empty());
+  const PipeModel u = derive_pipe_model(make_pipe(pipe_preset("u")), "u");
+  EXPECT_TRUE(u.symmetries.empty());
+}
+
+TEST(PipeModel, SymmetricUWithEqualLegsIsFound) {
+  PipeSpec spec;
+  spec.diameter_mm = 16;
+  spec.segments = parse_centreline("S60,B180r40,S60");
+  const PipeModel m = derive_pipe_model(make_pipe(spec), "u-equal");
+  EXPECT_GE(m.symmetries.size(), 1u);  // the half-turn about the U's axis of symmetry
+}
+
+TEST(PipeModel, ModelFrameNeedNotBeCentred) {
+  PipeSpec spec = pipe_preset("sbend");
+  spec.model_frame.translation() = Eigen::Vector3d(300, -200, 50);
+  const PipeModel far = derive_pipe_model(make_pipe(spec), "far");
+  const PipeModel near = derive_pipe_model(make_pipe(pipe_preset("sbend")), "near");
+  EXPECT_NEAR(far.tube_diameter_mm, near.tube_diameter_mm, 0.01);
+  EXPECT_NEAR(far.extent_mm, near.extent_mm, 0.01);
+}
+
+// Neighbour search against brute force, including the empty and one-point clouds.
+TEST(KdTree3, MatchesBruteForce) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(-100, 100);
+  for (int n : {0, 1, 2, 50, 2000}) {
+    std::vector<Eigen::Vector3f> pts(n);
+    for (auto& p : pts) p = {u(rng), u(rng), u(rng)};
+    KdTree3 tree;
+    tree.build(pts.data(), pts.size());
+    for (int q = 0; q < 100; ++q) {
+      const Eigen::Vector3f query(u(rng), u(rng), u(rng));
+      int idx = -1;
+      float d2 = -1;
+      const bool found = tree.nearest(query, &idx, &d2);
+      ASSERT_EQ(found, n > 0);
+      if (!found) continue;
+      float best = 1e30f;
+      for (const auto& p : pts) best = std::min(best, (p - query).squaredNorm());
+      EXPECT_NEAR(d2, best, 1e-2f);
+      EXPECT_NEAR((pts[idx] - query).squaredNorm(), best, 1e-2f);
+      int indices[64];
+      float dists[64];
+      const int k = tree.radius(query, 30, indices, dists, 64);
+      int brute = 0;
+      for (const auto& p : pts) brute += (p - query).squaredNorm() <= 900.0f;
+      EXPECT_EQ(k, std::min(brute, 64));
+      for (int i = 0; i < k; ++i) EXPECT_LE((pts[indices[i]] - query).squaredNorm(), 900.0f + 1e-2f);
+    }
+  }
+}
+
+}  // namespace
+}  // namespace pipeloc

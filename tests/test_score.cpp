@@ -1,0 +1,147 @@
+#include <gtest/gtest.h>
+
+#include "model/make_pipe.hpp"
+#include "score/mssd.hpp"
+#include "score/scorer.hpp"
+#include "sim/dataset_writer.hpp"
+#include "test_util.hpp"
+
+namespace pipeloc {
+namespace {
+
+// One small simulated dataset per pipe kind, shared by the tests of this file.
+class ScorerTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    for (const char* name : {"sbend", "torus"}) {
+      auto& d = data()[name];
+      d.dir = std::make_unique<test::TempDir>();
+      PipeSpec spec = pipe_preset(name);
+      spec.sides = 16;
+      d.model = std::make_unique<PipeModel>(derive_pipe_model(make_pipe(spec), name));
+      SimulateRequest req;
+      req.out_dir = d.dir->path();
+      req.images = 2;
+      req.seed = 9;
+      req.previews = false;
+      req.scene.pile.pipes = 10;
+      write_simulated_dataset(*d.model, req);
+      d.gt = read_scene_gt(scene_dir(req.out_dir, 1) + "/scene_gt.json");
+      d.info = read_scene_gt_info(scene_dir(req.out_dir, 1) + "/scene_gt_info.json");
+    }
+  }
+  static void TearDownTestSuite() { data().clear(); }
+
+  struct Data {
+    std::unique_ptr<test::TempDir> dir;
+    std::unique_ptr<PipeModel> model;
+    std::map<int, std::vector<GtPose>> gt;
+    std::map<int, std::vector<GtInfo>> info;
+  };
+  static std::map<std::string, Data>& data() {
+    static std::map<std::string, Data> d;
+    return d;
+  }
+
+  // The ground truth as results, scored by how visible each pipe is.
+  static ResultsFile truth_as_results(const Data& d) {
+    ResultsFile f;
+    for (const auto& [im, poses] : d.gt)
+      for (std::size_t i = 0; i < poses.size(); ++i)
+        f.rows.push_back({1, im, 1, d.info.at(im)[i].visib_fract, poses[i].model_to_cam, 0.02});
+    return f;
+  }
+  static int most_visible(const Data& d, int im) {
+    const auto& info = d.info.at(im);
+    int best = 0;
+    for (std::size_t i = 0; i < info.size(); ++i)
+      if (info[i].visib_fract > info[best].visib_fract) best = int(i);
+    return best;
+  }
+};
+
+TEST_F(ScorerTest, GroundTruthScoresOneEverywhere) {
+  const Data& d = data()["sbend"];
+  const ScoreReport r = score_results(d.dir->path(), truth_as_results(d));
+  EXPECT_GT(r.overall.top_pipes, 0);
+  EXPECT_DOUBLE_EQ(r.overall.top_recall(5), 1.0);
+  EXPECT_DOUBLE_EQ(r.overall.top_recall(10), 1.0);
+  EXPECT_DOUBLE_EQ(r.overall.best_correct(5), 1.0);
+  EXPECT_DOUBLE_EQ(r.overall.best_correct(10), 1.0);
+  EXPECT_DOUBLE_EQ(r.overall.precision_10(), 1.0);
+  EXPECT_NEAR(r.overall.time_median_s(), 0.02, 1e-12);
+  EXPECT_EQ(r.malformed_rows, 0);
+}
+
+TEST_F(ScorerTest, DisplacedEstimatesLandOnTheRightSideOfEachBound) {
+  const Data& d = data()["sbend"];
+  // A pure translation by delta moves every vertex by delta: MSSD = delta.
+  for (const double delta : {4.0, 7.0, 12.0}) {
+    ResultsFile f;
+    for (const auto& [im, poses] : d.gt) {
+      const int best = most_visible(d, im);
+      Pose p = poses[best].model_to_cam;
+      p.translation() += Eigen::Vector3d(0.6, 0.0, 0.8) * delta;
+      f.rows.push_back({1, im, 1, 1.0, p, 0.01});
+    }
+    const ScoreReport r = score_results(d.dir->path(), f);
+    EXPECT_DOUBLE_EQ(r.overall.best_correct(5), delta < 5 ? 1.0 : 0.0) << delta;
+    EXPECT_DOUBLE_EQ(r.overall.best_correct(10), delta < 10 ? 1.0 : 0.0) << delta;
+    EXPECT_DOUBLE_EQ(r.overall.precision_10(), delta < 10 ? 1.0 : 0.0) << delta;
+  }
+}
+
+TEST_F(ScorerTest, RotationErrorIsMaxVertexDisplacement) {
+  const Data& d = data()["sbend"];
+  const Pose truth = d.gt.at(0)[0].model_to_cam;
+  Pose est = truth;
+  est.linear() = truth.linear() * Eigen::AngleAxisd(0.02, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  std::vector<Eigen::Vector3d> v;
+  for (const auto& p : d.model->mesh.vertices) v.push_back(p.cast<double>());
+  double expected = 0;
+  for (const auto& p : v) expected = std::max(expected, (est * p - truth * p).norm());
+  EXPECT_NEAR(mssd(v, est, truth, {}, 1e9), expected, 1e-9);
+}
+
+TEST_F(ScorerTest, SymmetricModelScoresTheFlippedPoseAsCorrect) {
+  const Data& d = data()["torus"];
+  ASSERT_EQ(d.model->symmetries.size(), 1u);
+  ResultsFile f;
+  for (const auto& [im, poses] : d.gt)
+    f.rows.push_back({1, im, 1, 1.0, poses[most_visible(d, im)].model_to_cam * d.model->symmetries[0], 0.01});
+  const ScoreReport r = score_results(d.dir->path(), f);
+  EXPECT_DOUBLE_EQ(r.overall.best_correct(5), 1.0);
+}
+
+TEST_F(ScorerTest, AsymmetricModelDoesNotScoreTheFlippedPose) {
+  const Data& d = data()["sbend"];
+  // The half-turn that maps the torus-like pipe onto itself; for the S-bend it does not.
+  Pose flip = Pose::Identity();
+  flip.linear() = Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  const Eigen::Vector3d c = d.model->centroid.cast<double>();
+  flip.translation() = c - flip.linear() * c;
+  ResultsFile f;
+  for (const auto& [im, poses] : d.gt)
+    f.rows.push_back({1, im, 1, 1.0, poses[most_visible(d, im)].model_to_cam * flip, 0.01});
+  const ScoreReport r = score_results(d.dir->path(), f);
+  EXPECT_DOUBLE_EQ(r.overall.best_correct(10), 0.0);
+}
+
+TEST_F(ScorerTest, DuplicateEstimatesCountAgainstPrecision) {
+  const Data& d = data()["sbend"];
+  ResultsFile f;
+  const auto& poses = d.gt.at(0);
+  const int best = most_visible(d, 0);
+  f.rows.push_back({1, 0, 1, 0.9, poses[best].model_to_cam, 0.01});
+  f.rows.push_back({1, 0, 1, 0.8, poses[best].model_to_cam, 0.01});
+  f.malformed = 2;
+  const ScoreReport r = score_results(d.dir->path(), f);
+  EXPECT_EQ(r.overall.estimates, 2);
+  EXPECT_DOUBLE_EQ(r.overall.precision_10(), 0.5);
+  EXPECT_EQ(r.malformed_rows, 2);
+  // Image 1 has no estimate: it counts as a miss for best-correct.
+  EXPECT_DOUBLE_EQ(r.overall.best_correct(5), 0.5);
+}
+
+}  // namespace
+}  // namespace pipeloc

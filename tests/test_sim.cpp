@@ -1,0 +1,169 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "model/make_pipe.hpp"
+#include "model/neighbors.hpp"
+#include "sim/scene.hpp"
+
+namespace pipeloc {
+namespace {
+
+PipeModel coarse_model(const char* preset) {
+  PipeSpec spec = pipe_preset(preset);
+  spec.sides = 16;
+  spec.bend_step_deg = 10;
+  return derive_pipe_model(make_pipe(spec), preset);
+}
+
+SceneParams small_params(int pipes) {
+  SceneParams p;
+  p.pile.pipes = pipes;
+  return p;
+}
+
+TEST(Simulator, SameSeedSameScene) {
+  const PipeModel model = coarse_model("u");
+  std::mt19937 a(42), b(42);
+  const SimulatedScene s1 = simulate_scene(model, small_params(8), a);
+  const SimulatedScene s2 = simulate_scene(model, small_params(8), b);
+  ASSERT_EQ(s1.model_to_world.size(), s2.model_to_world.size());
+  EXPECT_EQ(s1.depth_mm.pixels, s2.depth_mm.pixels);
+  for (std::size_t i = 0; i < s1.model_to_world.size(); ++i)
+    EXPECT_TRUE(s1.model_to_world[i].isApprox(s2.model_to_world[i]));
+}
+
+// The noisy image agrees with the noise-free render at the true poses within the noise model:
+// on valid pixels of smooth surfaces, within 5 sigma plus one disparity step.
+TEST(Simulator, NoisyDepthAgreesWithTruthWithinNoiseModel) {
+  const PipeModel model = coarse_model("sbend");
+  std::mt19937 rng(3);
+  const SceneParams params = small_params(15);
+  const SimulatedScene s = simulate_scene(model, params, rng);
+  const auto& clean = s.clean.z_mm;
+  int checked = 0, outside = 0, valid = 0, rendered = 0;
+  for (int y = 2; y < clean.height - 2; ++y) {
+    for (int x = 2; x < clean.width - 2; ++x) {
+      if (clean.at(x, y) > 0) ++rendered;
+      const float z = s.depth_mm.at(x, y);
+      if (z <= 0) continue;
+      ++valid;
+      float lo = 1e9f, hi = 0;
+      for (int dy = -2; dy <= 2; ++dy)
+        for (int dx = -2; dx <= 2; ++dx) lo = std::min(lo, clean.at(x + dx, y + dy)), hi = std::max(hi, clean.at(x + dx, y + dy));
+      if (lo <= 0 || hi - lo > 3) continue;  // edges: lateral noise may pick the neighbour
+      ++checked;
+      const double bound = 5 * params.sensor.axial_sigma_mm(clean.at(x, y)) * 2 +  // grazing doubles sigma at most here
+                           params.sensor.depth_step_mm(clean.at(x, y), params.intrinsics.fx) + (hi - lo);
+      outside += std::abs(z - clean.at(x, y)) > bound;
+    }
+  }
+  EXPECT_GT(checked, 50000);
+  EXPECT_LT(double(outside) / checked, 1e-3) << outside << " of " << checked;
+  // The sensor loses some pixels (shadows, grazing, glints, dropouts) but not most.
+  EXPECT_LT(valid, rendered);
+  EXPECT_GT(valid, rendered * 8 / 10);
+}
+
+// Möller–Trumbore, for the brute-force recount.
+double ray_hit(const Eigen::Vector3d& d, const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
+  const Eigen::Vector3d e1 = b - a, e2 = c - a, p = d.cross(e2);
+  const double det = e1.dot(p);
+  if (std::abs(det) < 1e-12) return -1;
+  const Eigen::Vector3d s = -a;
+  const double u = s.dot(p) / det;
+  if (u < 0 || u > 1) return -1;
+  const Eigen::Vector3d q = s.cross(e1);
+  const double v = d.dot(q) / det;
+  if (v < 0 || u + v > 1) return -1;
+  return e2.dot(q) / det;
+}
+
+// px_count_all / px_count_visib agree with an independent per-pixel ray cast against every
+// triangle of every pipe, on a small image.
+TEST(Simulator, VisibilityMatchesBruteForceRayCast) {
+  const PipeModel model = coarse_model("u");
+  SceneParams params = small_params(7);
+  params.intrinsics = {160, 120, 142.6, 142.6, 79.5, 59.5};
+  std::mt19937 rng(11);
+  const SimulatedScene s = simulate_scene(model, params, rng);
+  const int n = int(s.model_to_world.size());
+  ASSERT_GE(n, 5);
+  std::vector<std::vector<Eigen::Vector3d>> verts(n);
+  for (int i = 0; i < n; ++i)
+    for (const auto& v : model.mesh.vertices) verts[i].push_back(s.model_to_cam(i) * v.cast<double>());
+  std::vector<int> all(n, 0), visib(n, 0);
+  for (int y = 0; y < params.intrinsics.height; ++y) {
+    for (int x = 0; x < params.intrinsics.width; ++x) {
+      const Eigen::Vector3d ray((x - params.intrinsics.cx) / params.intrinsics.fx, (y - params.intrinsics.cy) / params.intrinsics.fy, 1);
+      double nearest = 1e18;
+      int front = -1;
+      for (int i = 0; i < n; ++i) {
+        double best = -1;
+        for (const auto& f : model.mesh.faces) {
+          const double t = ray_hit(ray, verts[i][f[0]], verts[i][f[1]], verts[i][f[2]]);
+          if (t > 0 && (best < 0 || t < best)) best = t;
+        }
+        if (best < 0) continue;
+        ++all[i];
+        if (best < nearest) nearest = best, front = i;
+      }
+      if (front >= 0) ++visib[front];
+    }
+  }
+  for (int i = 0; i < n; ++i) {
+    const double tol = std::max(3.0, 0.03 * all[i]);  // pixel centres on triangle edges
+    EXPECT_NEAR(s.info[i].px_count_all, all[i], tol) << "pipe " << i;
+    EXPECT_NEAR(s.info[i].px_count_visib, visib[i], tol) << "pipe " << i;
+    const double occ = all[i] ? 1.0 - double(visib[i]) / all[i] : 1.0;
+    EXPECT_NEAR(s.info[i].occ_by_pipes, occ, 0.05) << "pipe " << i;
+    EXPECT_EQ(s.info[i].top, s.info[i].occ_by_pipes <= 0.05 && s.info[i].px_count_valid >= 0.4 * s.info[i].px_count_all);
+  }
+}
+
+// No pipe passes into another: no surface sample of one lies inside another by more than a
+// height-map cell.
+TEST(Simulator, PipesDoNotInterpenetrateAndLieAtVariedTilts) {
+  const PipeModel model = coarse_model("sbend");
+  std::mt19937 rng(5);
+  PileParams pile;
+  pile.pipes = 14;
+  const std::vector<Pose> poses = build_pile(model, pile, rng);
+  ASSERT_EQ(int(poses.size()), pile.pipes);
+  const float r = model.tube_diameter_mm / 2;
+  double deepest = 0;
+  for (std::size_t b = 0; b < poses.size(); ++b) {
+    std::vector<Eigen::Vector3f> pts, nrm;
+    for (std::size_t k = 0; k < model.surface.points.size(); ++k) {
+      pts.push_back((poses[b].cast<float>() * model.surface.points[k]));
+      nrm.push_back(poses[b].linear().cast<float>() * model.surface.normals[k]);
+    }
+    KdTree3 tree;
+    tree.build(pts.data(), pts.size());
+    for (std::size_t a = 0; a < poses.size(); ++a) {
+      if (a == b) continue;
+      for (std::size_t k = 0; k < model.surface.points.size(); k += 4) {
+        const Eigen::Vector3f q = poses[a].cast<float>() * model.surface.points[k];
+        int idx;
+        float d2;
+        tree.nearest(q, &idx, &d2);
+        if (d2 > r * r) continue;
+        const double depth = -(q - pts[idx]).dot(nrm[idx]);  // > 0: inside pipe b
+        deepest = std::max(deepest, depth);
+      }
+    }
+  }
+  EXPECT_LT(deepest, 2.0 * pile.cell_mm);
+  // The pile is not flat: some pipes rest tilted on others.
+  const Eigen::Matrix3d flat = poses[0].linear();
+  int tilted = 0;
+  for (const auto& p : poses) {
+    const Eigen::Vector3d up_in_model = p.linear().transpose() * Eigen::Vector3d::UnitZ();
+    const Eigen::Vector3d first_up = flat.transpose() * Eigen::Vector3d::UnitZ();
+    tilted += std::acos(std::clamp(std::abs(up_in_model.dot(first_up)), 0.0, 1.0)) > 5 * M_PI / 180;
+  }
+  EXPECT_GE(tilted, 2);
+}
+
+}  // namespace
+}  // namespace pipeloc
