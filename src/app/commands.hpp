@@ -9,6 +9,8 @@ namespace pipeloc::app {
 void add_make_pipe(CLI::App& app);
 void add_simulate(CLI::App& app);
 void add_score(CLI::App& app);
+void add_locate(CLI::App& app);
+void add_eval_bop(CLI::App& app);
 
 // Exit status a callback asks for (0 unless set).
 int& exit_status();

@@ -18,6 +18,8 @@ int main(int argc, char** argv) {
   pipeloc::app::add_make_pipe(app);
   pipeloc::app::add_simulate(app);
   pipeloc::app::add_score(app);
+  pipeloc::app::add_locate(app);
+  pipeloc::app::add_eval_bop(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -36,11 +36,15 @@ void DepthTarget::reset(int width, int height) {
   normal.resize(width, height, Eigen::Vector3f::Zero());
 }
 
-int render_perspective(const Mesh& mesh, const Pose& model_to_cam, const Intrinsics& k, int label,
-                       DepthTarget* target) {
+namespace {
+
+// Scan-converts the mesh seen through the pinhole; on_pixel(x, y, z, normal) for each covered
+// pixel centre, with the exact depth of the triangle's plane along that pixel's ray.
+template <typename OnPixel>
+void draw_perspective(const Mesh& mesh, const Pose& model_to_cam, const Intrinsics& k, int x0, int y0, int x1,
+                      int y1, OnPixel on_pixel) {
   const Eigen::Matrix3d r = model_to_cam.linear();
   const Eigen::Vector3d t = model_to_cam.translation();
-  int won = 0;
   for (const auto& f : mesh.faces) {
     const Eigen::Vector3d p0 = r * mesh.vertices[f[0]].cast<double>() + t;
     const Eigen::Vector3d p1 = r * mesh.vertices[f[1]].cast<double>() + t;
@@ -51,23 +55,56 @@ int render_perspective(const Mesh& mesh, const Pose& model_to_cam, const Intrins
     n.normalize();
     if (n.dot(p0) > 0) n = -n;  // face the camera: depth images see either side
     const double plane = n.dot(p0);
-    scan_triangle(k.project(p0), k.project(p1), k.project(p2), target->z_mm.width,
-                  target->z_mm.height, [&](int x, int y) {
-                    // Exact depth where the pixel's ray meets the triangle's plane.
+    const Eigen::Vector2d s0 = k.project(p0), s1 = k.project(p1), s2 = k.project(p2);
+    scan_triangle(s0 - Eigen::Vector2d(x0, y0), s1 - Eigen::Vector2d(x0, y0), s2 - Eigen::Vector2d(x0, y0),
+                  x1 - x0 + 1, y1 - y0 + 1, [&](int xr, int yr) {
+                    const int x = xr + x0, y = yr + y0;
                     const Eigen::Vector3d ray((x - k.cx) / k.fx, (y - k.cy) / k.fy, 1.0);
                     const double denom = n.dot(ray);
                     if (std::abs(denom) < 1e-9) return;
                     const float z = float(plane / denom);
-                    float& cur = target->z_mm.at(x, y);
-                    if (z > 0 && (cur == 0 || z < cur)) {
-                      if (target->label.at(x, y) != label) ++won;
-                      cur = z;
-                      target->label.at(x, y) = label;
-                      target->normal.at(x, y) = n.cast<float>();
-                    }
+                    if (z > 0) on_pixel(x, y, z, n);
                   });
   }
-  return won;
+}
+
+}  // namespace
+
+void render_perspective(const Mesh& mesh, const Pose& model_to_cam, const Intrinsics& k, int label,
+                        DepthTarget* target) {
+  draw_perspective(mesh, model_to_cam, k, 0, 0, target->z_mm.width - 1, target->z_mm.height - 1,
+                   [&](int x, int y, float z, const Eigen::Vector3d& n) {
+                     float& cur = target->z_mm.at(x, y);
+                     if (cur == 0 || z < cur) {
+                       cur = z;
+                       target->label.at(x, y) = label;
+                       target->normal.at(x, y) = n.cast<float>();
+                     }
+                   });
+}
+
+PixelBox render_depth_in_box(const Mesh& mesh, const Pose& model_to_cam, const Intrinsics& k, Image<float>* z_mm) {
+  PixelBox box;
+  double lo_x = 1e30, lo_y = 1e30, hi_x = -1e30, hi_y = -1e30;
+  for (const auto& v : mesh.vertices) {
+    const Eigen::Vector3d p = model_to_cam * v.cast<double>();
+    if (p.z() <= 1) return box;
+    const Eigen::Vector2d s = k.project(p);
+    lo_x = std::min(lo_x, s.x()), hi_x = std::max(hi_x, s.x());
+    lo_y = std::min(lo_y, s.y()), hi_y = std::max(hi_y, s.y());
+  }
+  box.x0 = std::max(0, int(std::floor(lo_x)));
+  box.y0 = std::max(0, int(std::floor(lo_y)));
+  box.x1 = std::min(z_mm->width - 1, int(std::ceil(hi_x)));
+  box.y1 = std::min(z_mm->height - 1, int(std::ceil(hi_y)));
+  if (box.empty()) return box;
+  for (int y = box.y0; y <= box.y1; ++y) std::fill_n(&z_mm->at(box.x0, y), box.x1 - box.x0 + 1, 0.0f);
+  draw_perspective(mesh, model_to_cam, k, box.x0, box.y0, box.x1, box.y1,
+                   [&](int x, int y, float z, const Eigen::Vector3d&) {
+                     float& cur = z_mm->at(x, y);
+                     if (cur == 0 || z < cur) cur = z;
+                   });
+  return box;
 }
 
 float HeightMap::at(double x, double y, float outside) const {

@@ -17,9 +17,17 @@ struct DepthTarget {
 };
 
 // Draws the mesh at model_to_cam, keeping the nearest surface per pixel centre.
-// Returns the number of pixels this mesh won.
-int render_perspective(const Mesh& mesh, const Pose& model_to_cam, const Intrinsics& k, int label,
-                       DepthTarget* target);
+void render_perspective(const Mesh& mesh, const Pose& model_to_cam, const Intrinsics& k, int label,
+                        DepthTarget* target);
+
+struct PixelBox {
+  int x0 = 0, y0 = 0, x1 = -1, y1 = -1;  // inclusive
+  bool empty() const { return x1 < x0 || y1 < y0; }
+};
+
+// Depth of the mesh alone, drawn into the part of z_mm it covers (cleared first); the rest of
+// z_mm is untouched. Returns that box (empty if the mesh is off-screen or behind the camera).
+PixelBox render_depth_in_box(const Mesh& mesh, const Pose& model_to_cam, const Intrinsics& k, Image<float>* z_mm);
 
 // A height map over the world XY plane: cell (i, j) has centre (origin + i*cell, origin + j*cell).
 struct HeightMap {

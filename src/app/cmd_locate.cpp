@@ -1,0 +1,154 @@
+#include <spdlog/spdlog.h>
+
+#include <chrono>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <memory>
+
+#include "app/commands.hpp"
+#include "config/config_file.hpp"
+#include "io/bop.hpp"
+#include "io/results_csv.hpp"
+#include "locate/locator.hpp"
+#include "model/pipe_model.hpp"
+#include "report/locate_overlay.hpp"
+
+namespace pipeloc::app {
+namespace {
+
+LocateConfig config_or_default(const std::string& path) {
+  if (path.empty()) return LocateConfig{};
+  const AppConfig cfg = load_config(path);
+  for (const auto& line : describe_config(cfg)) spdlog::info("config: {}", line);
+  return cfg.locate;
+}
+
+Json estimate_json(const PipeEstimate& e, int rank, bool pick) {
+  return {{"rank", rank},
+          {"pick", pick},
+          {"score", e.score},
+          {"R", rotation_rowmajor(e.model_to_cam)},
+          {"t_mm", translation_mm(e.model_to_cam)},
+          {"pickable", e.pickable},
+          {"ambiguous", e.ambiguous},
+          {"ridge_residual_mm", e.ridge_cost_mm},
+          {"ridge_points", e.ridge_points},
+          {"refine_inliers", e.refine_inliers},
+          {"refine_rms_mm", e.refine_rms_mm},
+          {"agreement", e.check.agreement()},
+          {"free_space", e.check.free_space()},
+          {"occluded", e.check.occluded()},
+          {"model_px", e.check.model_px}};
+}
+
+}  // namespace
+
+void add_locate(CLI::App& app) {
+  struct Options {
+    std::string depth, camera, model, overlay, config;
+    int im_id = -1;
+  };
+  auto opt = std::make_shared<Options>();
+  auto* cmd = app.add_subcommand("locate", "Localize the top pipes in one depth image; one JSON line per pipe");
+  cmd->add_option("--depth", opt->depth, "16-bit depth PNG")->required();
+  cmd->add_option("--camera", opt->camera, "scene_camera.json (BOP) holding this image's camera")->required();
+  cmd->add_option("--im-id", opt->im_id, "image id in the camera file (default: the file's only or first entry)");
+  cmd->add_option("--model", opt->model, "pipe STL (mm)")->required();
+  cmd->add_option("--overlay", opt->overlay, "write the overlay PNG here");
+  cmd->add_option("--config", opt->config, "TOML config ([locate] thresholds)");
+  cmd->callback([opt] {
+    const LocateConfig cfg = config_or_default(opt->config);
+    const auto cameras = read_scene_camera(opt->camera);
+    if (cameras.empty()) throw IoError("'" + opt->camera + "': holds no camera");
+    const auto it = opt->im_id < 0 ? cameras.begin() : cameras.find(opt->im_id);
+    if (it == cameras.end()) throw IoError("'" + opt->camera + "': no entry for image " + std::to_string(opt->im_id));
+    const CameraInfo& cam = it->second;
+    const Image<float> depth = read_depth_mm(opt->depth, cam.depth_scale);
+    CameraInfo sized = cam;
+    sized.intrinsics.width = depth.width;
+    sized.intrinsics.height = depth.height;
+    const PipeModel model = load_pipe_model(opt->model);
+    Locator locator(model, cfg, sized.intrinsics);
+    const LocateOutput& out = locator.locate(depth, sized);
+    const int pick = out.pick();
+    for (std::size_t i = 0; i < out.estimates.size(); ++i)
+      std::cout << estimate_json(out.estimates[i], int(i), int(i) == pick).dump() << '\n';
+    spdlog::info("{} pipes found ({} candidate regions, {} cores) in {:.1f} ms; pick: {}", out.estimates.size(),
+                 out.regions.candidates, out.regions.cores_kept, out.times.total_ms,
+                 pick >= 0 ? "rank " + std::to_string(pick) : std::string("none"));
+    const StageTimes& st = out.times;
+    spdlog::info("stages ms: zbuffer {:.1f} normals {:.1f} regions {:.1f} axis {:.1f} ridge_icp {:.1f} refine {:.1f} verify {:.1f}",
+                 st.zbuffer_ms, st.normals_ms, st.regions_ms, st.axis_ms, st.ridge_icp_ms, st.refine_ms, st.verify_ms);
+    for (std::size_t c = 0; c < out.traces.size(); ++c) {
+      const CandidateTrace& tr = out.traces[c];
+      spdlog::info("candidate {}: {} (ridge points {}, ridge residual {:.2f} mm, axis sections {})", c,
+                   outcome_name(tr.outcome), tr.ridge_count, tr.ridge_cost_mm, tr.axis.best_count);
+    }
+    if (!opt->overlay.empty()) {
+      write_rgb_png(opt->overlay, draw_locate_overlay(locator, depth, sized));
+      spdlog::info("overlay written to {}", opt->overlay);
+    }
+  });
+}
+
+void add_eval_bop(CLI::App& app) {
+  struct Options {
+    std::string dataset, out, config, match = "zridge", overlays;
+  };
+  auto opt = std::make_shared<Options>();
+  auto* cmd = app.add_subcommand("eval-bop", "Run every target of a BOP dataset and write BOP results CSV");
+  cmd->add_option("--dataset", opt->dataset, "BOP dataset directory")->required();
+  cmd->add_option("--out", opt->out, "results CSV to write")->required();
+  cmd->add_option("--config", opt->config, "TOML config ([locate] thresholds)");
+  cmd->add_option("--match", opt->match, "zridge (the paper) or surface (whole visible surface)")
+      ->check(CLI::IsMember({"zridge", "surface"}));
+  cmd->add_option("--overlays", opt->overlays, "also write an overlay PNG per image into this directory");
+  cmd->callback([opt] {
+    LocateConfig cfg = config_or_default(opt->config);
+    cfg.match_surface = opt->match == "surface";
+    const auto targets = read_targets(opt->dataset + "/test_targets_bop19.json");
+    std::map<int, std::unique_ptr<PipeModel>> models;
+    std::map<int, std::unique_ptr<Locator>> locators;
+    std::map<int, std::map<int, CameraInfo>> cameras;
+    std::ofstream csv(opt->out);
+    if (!csv) throw IoError("cannot write '" + opt->out + "'");
+    write_results_header(csv);
+    int images = 0, rows = 0;
+    double total_ms = 0;
+    for (const auto& t : targets) {
+      if (!cameras.count(t.scene_id))
+        cameras[t.scene_id] = read_scene_camera(scene_dir(opt->dataset, t.scene_id) + "/scene_camera.json");
+      const auto cam_it = cameras[t.scene_id].find(t.im_id);
+      if (cam_it == cameras[t.scene_id].end())
+        throw IoError("scene " + std::to_string(t.scene_id) + ": no camera for image " + std::to_string(t.im_id));
+      const Image<float> depth = read_depth_mm(depth_path(opt->dataset, t.scene_id, t.im_id), cam_it->second.depth_scale);
+      CameraInfo cam = cam_it->second;
+      cam.intrinsics.width = depth.width;
+      cam.intrinsics.height = depth.height;
+      if (!locators.count(t.obj_id)) {
+        models[t.obj_id] = std::make_unique<PipeModel>(load_pipe_model(model_path(opt->dataset, t.obj_id)));
+        locators[t.obj_id] = std::make_unique<Locator>(*models[t.obj_id], cfg, cam.intrinsics);
+      }
+      Locator& locator = *locators[t.obj_id];
+      const LocateOutput& out = locator.locate(depth, cam);
+      for (const auto& e : out.estimates) {
+        write_result_row(csv, {t.scene_id, t.im_id, t.obj_id, e.score, e.model_to_cam, out.times.total_ms / 1000.0});
+        ++rows;
+      }
+      ++images;
+      total_ms += out.times.total_ms;
+      if (!opt->overlays.empty()) {
+        char name[64];
+        std::snprintf(name, sizeof name, "/%06d_%06d_obj%d.png", t.scene_id, t.im_id, t.obj_id);
+        write_rgb_png(opt->overlays + name, draw_locate_overlay(locator, depth, cam));
+      }
+      spdlog::debug("scene {} image {}: {} estimates in {:.1f} ms", t.scene_id, t.im_id, out.estimates.size(),
+                    out.times.total_ms);
+    }
+    spdlog::info("{} images, {} result rows, mean {:.1f} ms per image -> {}", images, rows,
+                 images ? total_ms / images : 0.0, opt->out);
+  });
+}
+
+}  // namespace pipeloc::app

@@ -1,0 +1,171 @@
+#include "locate/icp.hpp"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+
+namespace pipeloc {
+namespace {
+
+// Nearest of pts[0..n) to q (brute force: ridges hold a few hundred points).
+int nearest(const Eigen::Vector3f& q, const Eigen::Vector3f* pts, int n, float* d2) {
+  int best = -1;
+  float bd = 1e30f;
+  for (int i = 0; i < n; ++i) {
+    const float d = (pts[i] - q).squaredNorm();
+    if (d < bd) bd = d, best = i;
+  }
+  *d2 = bd;
+  return best;
+}
+
+int model_ridge(const LocatorModel& lm, const Pose& pose, const Eigen::Vector2f& axis, const LocateConfig& cfg,
+                IcpBuffers* buf) {
+  const Eigen::Matrix3f r = pose.linear().cast<float>();
+  const Eigen::Vector3f t = pose.translation().cast<float>();
+  const int n = int(lm.ridge_samples.size());
+  for (int i = 0; i < n; ++i) buf->moved[i] = r * lm.ridge_samples[i] + t;
+  return extract_zridge(buf->moved.data(), n, axis, float(cfg.ridge_cell_mm), 0.3f * lm.tube_d_mm, &buf->ridge,
+                        buf->model_ridge.data(), int(buf->model_ridge.size()));
+}
+
+// Mean of min(distance, cap) from each of a to its nearest in b.
+float truncated_mean(const Eigen::Vector3f* a, int na, const Eigen::Vector3f* b, int nb, float cap, int* matched) {
+  if (na == 0) return cap;
+  float sum = 0;
+  int m = 0;
+  for (int i = 0; i < na; ++i) {
+    float d2;
+    nearest(a[i], b, nb, &d2);
+    const float d = std::sqrt(d2);
+    if (d < cap) ++m;
+    sum += std::min(d, cap);
+  }
+  if (matched) *matched = m;
+  return sum / float(na);
+}
+
+}  // namespace
+
+void reserve_icp(IcpBuffers* buf, const LocatorModel& lm, int max_ridge_points, float ridge_cell_mm) {
+  buf->moved.assign(lm.ridge_samples.size(), Eigen::Vector3f::Zero());
+  buf->model_ridge.assign(std::size_t(max_ridge_points), Eigen::Vector3f::Zero());
+  buf->src.assign(std::size_t(2 * max_ridge_points), Eigen::Vector3f::Zero());
+  buf->dst.assign(std::size_t(2 * max_ridge_points), Eigen::Vector3f::Zero());
+  reserve_ridge(&buf->ridge, lm.extent_l_mm + 2 * lm.tube_d_mm, ridge_cell_mm);
+}
+
+Pose fit_rigid(const Eigen::Vector3f* src, const Eigen::Vector3f* dst, int n) {
+  Eigen::Vector3d cs = Eigen::Vector3d::Zero(), cd = Eigen::Vector3d::Zero();
+  for (int i = 0; i < n; ++i) cs += src[i].cast<double>(), cd += dst[i].cast<double>();
+  cs /= n;
+  cd /= n;
+  Eigen::Matrix3d h = Eigen::Matrix3d::Zero();
+  for (int i = 0; i < n; ++i) h += (src[i].cast<double>() - cs) * (dst[i].cast<double>() - cd).transpose();
+  Eigen::JacobiSVD<Eigen::Matrix3d> svd(h, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d d = Eigen::Matrix3d::Identity();
+  d(2, 2) = (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0 ? -1 : 1;
+  Pose out = Pose::Identity();
+  out.linear() = svd.matrixV() * d * svd.matrixU().transpose();
+  out.translation() = cd - out.linear() * cs;
+  return out;
+}
+
+RidgeFit ridge_icp(const LocatorModel& lm, const Pose& start, const Eigen::Vector3f* obs, int n_obs,
+                   const Eigen::Vector2f& axis, const LocateConfig& cfg, IcpBuffers* buf) {
+  RidgeFit fit;
+  fit.pose = start;
+  const float d = lm.tube_d_mm;
+  // Correspondences farther than this are dropped; it shrinks from a third of the pipe to D/2.
+  float gate = std::max(lm.extent_l_mm / 3, d);
+  for (int it = 0; it < cfg.icp_max_iterations; ++it) {
+    fit.iterations = it + 1;
+    const int nm = model_ridge(lm, fit.pose, axis, cfg, buf);  // 2.2.1
+    int pairs = 0;
+    for (int i = 0; i < nm; ++i) {  // 2.2.2
+      float d2;
+      const int j = nearest(buf->model_ridge[i], obs, n_obs, &d2);
+      if (j < 0 || d2 > gate * gate) continue;
+      buf->src[pairs] = buf->model_ridge[i];
+      buf->dst[pairs] = obs[j];
+      ++pairs;
+    }
+    // Both ways: observed ridge points pull too, so the model cannot slide along the ridge
+    // towards parts that were not observed.
+    for (int j = 0; j < n_obs && pairs < int(buf->src.size()); ++j) {
+      float d2;
+      const int i = nearest(obs[j], buf->model_ridge.data(), nm, &d2);
+      if (i < 0 || d2 > gate * gate) continue;
+      buf->src[pairs] = buf->model_ridge[i];
+      buf->dst[pairs] = obs[j];
+      ++pairs;
+    }
+    if (pairs < 6) break;
+    const Pose delta = fit_rigid(buf->src.data(), buf->dst.data(), pairs);  // 2.2.3
+    fit.pose = delta * fit.pose;
+    gate = std::max(0.5f * d, gate * 0.7f);
+    const double moved = delta.translation().norm() +
+                         Eigen::AngleAxisd(delta.linear()).angle() * lm.extent_l_mm / 2;
+    if (moved < cfg.icp_converged_mm && gate <= 0.5f * d) break;
+  }
+  const int nm = model_ridge(lm, fit.pose, axis, cfg, buf);
+  fit.model_ridge_points = nm;
+  const float cap = 0.5f * d;
+  const float m2o = truncated_mean(buf->model_ridge.data(), nm, obs, n_obs, cap, &fit.matched);
+  const float o2m = truncated_mean(obs, n_obs, buf->model_ridge.data(), nm, cap, nullptr);
+  fit.cost_mm = 0.5f * (m2o + o2m);
+  return fit;
+}
+
+RefineResult refine_on_surface(const LocatorModel& lm, const Pose& start, const Eigen::Vector3f* obs, int n,
+                               const LocateConfig& cfg) {
+  RefineResult res;
+  res.pose = start;
+  const auto& sp = lm.model->surface.points;
+  const auto& sn = lm.model->surface.normals;
+  const float inlier = float(cfg.refine_inlier_mm);
+  for (int it = 0; it < cfg.refine_iterations; ++it) {
+    const Eigen::Matrix3f r = res.pose.linear().cast<float>();
+    const Eigen::Vector3f t = res.pose.translation().cast<float>();
+    const Eigen::Matrix3f rt = r.transpose();
+    const Eigen::Vector3f c = r * lm.centroid + t;  // linearise about the model's centroid
+    Eigen::Matrix<double, 6, 6> a = Eigen::Matrix<double, 6, 6>::Zero();
+    Eigen::Matrix<double, 6, 1> b = Eigen::Matrix<double, 6, 1>::Zero();
+    int inliers = 0;
+    double sq = 0;
+    for (int i = 0; i < n; ++i) {
+      const Eigen::Vector3f q = rt * (obs[i] - t);  // observed point in the model frame
+      const int s = lm.nearest_sample(q);
+      if (s < 0) continue;
+      const Eigen::Vector3f diff = q - sp[s];
+      if (diff.squaredNorm() > inlier * inlier) continue;
+      const Eigen::Vector3f nw = r * sn[s];
+      const Eigen::Vector3f mw = r * sp[s] + t - c;
+      const float res_i = nw.dot(r * diff);  // observed minus model, along the normal
+      // Moving the model by (w, v) changes the model point by w x m + v.
+      Eigen::Matrix<double, 6, 1> j;
+      j.head<3>() = mw.cross(nw).cast<double>();
+      j.tail<3>() = nw.cast<double>();
+      const double w = std::abs(res_i) < 1.5f ? 1.0 : 1.5 / std::abs(res_i);  // Huber
+      a += w * j * j.transpose();
+      b += w * j * double(res_i);
+      ++inliers;
+      sq += double(res_i) * res_i;
+    }
+    res.inliers = inliers;
+    res.rms_mm = inliers ? float(std::sqrt(sq / inliers)) : 0.f;
+    if (inliers < 12) break;
+    const Eigen::Matrix<double, 6, 1> x = a.ldlt().solve(b);
+    if (!x.allFinite()) break;
+    Pose delta = Pose::Identity();
+    const double angle = x.head<3>().norm();
+    if (angle > 1e-12) delta.linear() = Eigen::AngleAxisd(angle, x.head<3>() / angle).toRotationMatrix();
+    const Eigen::Vector3d cd = c.cast<double>();
+    delta.translation() = cd - delta.linear() * cd + x.tail<3>();
+    res.pose = delta * res.pose;
+    if (x.tail<3>().norm() < 0.01 && angle < 1e-4) break;
+  }
+  return res;
+}
+
+}  // namespace pipeloc

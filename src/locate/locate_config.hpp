@@ -1,0 +1,58 @@
+// Every threshold of the localizer, with its unit and a default. Sizes in mm that depend on the
+// pipe are given as shares of the tube diameter D or the longest extent L, which come from the
+// model; noise-dependent values follow the sensor model of DESIGN.md.
+#pragma once
+
+namespace pipeloc {
+
+struct LocateConfig {
+  // II-A: Z-buffer and normals.
+  double zbuffer_pixel_mm = 1.0;        // the paper's 1 mm cells
+  double zbuffer_max_side_mm = 1600;    // the Z-buffer covers at most this square of the bin
+  double hole_fill_mm = 8.0;            // glint holes up to this wide are filled (about D/2)
+  double normal_window_mm = 7.0;        // plane-fit neighbourhood (about D/3: the pipe stays locally plane)
+  double normal_min_valid_share = 0.4;  // of the window's cells; fewer and the cell has no normal
+
+  // II-B, Algorithm 1: candidate regions.
+  double upward_normal_max_deg = 25;    // core cells: N . Nv > cos(this)   (N_th1)
+  double continuity_max_deg = 25;       // growth: N_i . N_j > cos(this)
+  double continuity_step_max_mm = 4;    // growth: no jump in height between neighbours (> noise, < D/4)
+  double core_min_area_of_d2 = 0.75;    // A_th = this * D^2
+  double core_max_extent_of_l = 1.15;   // a core longer than the pipe is not one pipe (bin rims, floor)
+  double region_min_extent_of_l = 0.7;  // a of the paper
+  double convexity_min_of_d = 0.05;     // grown cells lie on average this far below their core
+
+  // III: principal direction by cross-section widths.
+  double section_width_min_of_d = 0.85;  // the paper's 0.9R..1.0R, widened by one cell each side
+  double section_width_max_of_d = 1.05;
+  double scan_step_deg = 5;
+
+  // IV: Z-ridge ICP from 2 x initial_rotations starts.
+  double ridge_cell_mm = 2.0;
+  int initial_rotations = 6;           // 0/120/240 degrees about the axis
+  int icp_max_iterations = 30;
+  double icp_converged_mm = 0.05;
+  double residual_max_of_d = 0.35;     // R_th = this * D (mean ridge distance; verification follows)
+
+  // Beyond the paper: surface refinement, verification, ambiguity.
+  int refine_iterations = 12;
+  double refine_inlier_mm = 4;          // point-to-plane pairs farther than this are not the pipe
+  double verify_tolerance_mm = 7;       // about 3 sigma of axial noise at 1.1 m plus a disparity step
+  double verify_min_agreement = 0.6;    // share of the model's visible pixels the sensor confirms
+  double verify_max_free_space = 0.05;  // share of model pixels where the sensor saw through it
+  double verify_max_occluded = 0.15;    // share of model pixels covered by something in front
+  int verify_hypotheses = 3;            // distinct ridge fits refined and checked per region
+  double ambiguity_pose_mm = 10;        // two fits further apart than this (MSSD) ...
+  double ambiguity_quality_margin = 0.05;  // ... both confirmed within this margin: ambiguous
+
+  // The paper's comparison: ICP on points sampled from the whole visible surface instead of the
+  // Z-ridge (eval-bop --match surface).
+  bool match_surface = false;
+
+  // Choice of the pick and fixed sizes.
+  int max_candidates = 24;
+  int max_results = 16;
+  int threads = 2;
+};
+
+}  // namespace pipeloc

@@ -1,0 +1,99 @@
+// The localizer: one depth frame in, ranked pipe poses out. Every buffer is sized in the
+// constructor from the camera and the model; locate() itself does not allocate.
+#pragma once
+
+#include <chrono>
+#include <vector>
+
+#include "core/camera.hpp"
+#include "locate/icp.hpp"
+#include "locate/principal_axis.hpp"
+#include "locate/regions.hpp"
+#include "locate/verify.hpp"
+
+namespace pipeloc {
+
+struct PipeEstimate {
+  Pose model_to_bin = Pose::Identity();
+  Pose model_to_cam = Pose::Identity();
+  float score = 0;              // share of the model's silhouette the sensor confirms, lowered when occluded or ambiguous
+  float ridge_cost_mm = 0;      // Algorithm 2 residual (mean truncated ridge distance)
+  int ridge_points = 0;         // observed Z-ridge points of the region
+  int refine_inliers = 0;
+  float refine_rms_mm = 0;
+  Verification check;
+  bool ambiguous = false;       // another pose of the model fits about as well (torus-like pipes)
+  bool pickable = false;        // accepted, not lying under another pipe, not ambiguous
+  int candidate = -1;           // index of its candidate region
+};
+
+// Why a candidate did not become an estimate.
+enum class CandidateOutcome { accepted, few_ridge_points, residual_too_high, not_confirmed, duplicate, budget };
+const char* outcome_name(CandidateOutcome o);
+
+struct CandidateTrace {
+  AxisEstimate axis;
+  int ridge_begin = 0, ridge_count = 0;  // observed ridge points in Locator::ridge_points()
+  Pose ridge_pose = Pose::Identity();     // after Algorithm 2, before refinement
+  float ridge_cost_mm = 0;
+  CandidateOutcome outcome = CandidateOutcome::budget;
+};
+
+struct StageTimes {
+  double zbuffer_ms = 0, normals_ms = 0, regions_ms = 0, axis_ms = 0, ridge_icp_ms = 0, refine_ms = 0,
+         verify_ms = 0, total_ms = 0;
+};
+
+struct LocateOutput {
+  std::vector<PipeEstimate> estimates;  // ranked, best first; capacity max_results
+  std::vector<CandidateTrace> traces;   // one per candidate region
+  RegionStats regions;
+  StageTimes times;
+  int valid_pixels = 0;
+  bool budget_exhausted = false;
+  int pick() const {
+    for (std::size_t i = 0; i < estimates.size(); ++i)
+      if (estimates[i].pickable) return int(i);
+    return -1;
+  }
+};
+
+class Locator {
+ public:
+  using Clock = std::chrono::steady_clock;
+
+  Locator(const PipeModel& model, const LocateConfig& cfg, const Intrinsics& camera);
+
+  // Localizes pipes in depth_mm (0 = no reading). Candidates are worked best first; when the
+  // deadline passes, what has been found so far is returned with budget_exhausted set.
+  const LocateOutput& locate(const Image<float>& depth_mm, const CameraInfo& camera,
+                             Clock::time_point deadline = Clock::time_point::max());
+
+  const LocateOutput& output() const { return out_; }
+  const ZBuffer& zbuffer() const { return zb_; }
+  const RegionBuffers& regions() const { return rb_; }
+  const std::vector<Eigen::Vector3f>& ridge_points() const { return ridge_pts_; }
+  const LocatorModel& locator_model() const { return lm_; }
+  const LocateConfig& config() const { return cfg_; }
+
+ private:
+  void work_candidate(int c, const Image<float>& depth, const CameraInfo& camera, const Pose& bin_to_cam);
+
+  const PipeModel& model_;
+  LocateConfig cfg_;
+  LocatorModel lm_;
+  ZBuffer zb_;
+  NormalMap nm_;
+  std::vector<float> hole_scratch_;
+  RegionBuffers rb_;
+  AxisBuffers ab_;
+  IcpBuffers icp_;
+  std::vector<Eigen::Vector3f> ridge_pts_;   // observed ridges of all candidates
+  std::vector<Eigen::Vector3f> region_pts_;  // one region's points for refinement
+  std::vector<RidgeFit> fits_;
+  Image<float> scratch_depth_;
+  LocateOutput out_;
+  int ridge_capacity_ = 0;
+};
+
+}  // namespace pipeloc

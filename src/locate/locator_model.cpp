@@ -1,0 +1,158 @@
+#include "locate/locator_model.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+
+#include "locate/locate_config.hpp"
+#include "locate/principal_axis.hpp"
+#include "render/raster.hpp"
+
+namespace pipeloc {
+
+namespace {
+
+// The model at `rotation`, seen from above as the localizer sees a pipe: its principal
+// direction and centre by III, and the pose that puts them on +X and the origin.
+Pose canonical_start(const PipeModel& model, const Eigen::Matrix3d& rotation, const LocateConfig& cfg) {
+  Pose lying = Pose::Identity();
+  lying.linear() = rotation;
+  HeightMap hm;
+  hm.cell_mm = cfg.zbuffer_pixel_mm;
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e30), hi = -lo;
+  for (const auto& v : model.mesh.vertices) {
+    const Eigen::Vector3d p = rotation * v.cast<double>();
+    lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+  }
+  hm.origin_x_mm = lo.x() - 2 * hm.cell_mm;
+  hm.origin_y_mm = lo.y() - 2 * hm.cell_mm;
+  const int w = int((hi.x() - lo.x()) / hm.cell_mm) + 5, h = int((hi.y() - lo.y()) / hm.cell_mm) + 5;
+  hm.z_mm.resize(w, h, -1e30f);
+  render_height(model.mesh, lying, Envelope::top, &hm);
+  ZBuffer zb;
+  zb.origin_x_mm = hm.origin_x_mm;
+  zb.origin_y_mm = hm.origin_y_mm;
+  zb.pixel_mm = hm.cell_mm;
+  zb.width = w;
+  zb.height = h;
+  zb.z.resize(w, h, ZBuffer::kEmpty);
+  std::vector<int> cells;
+  Eigen::Vector3f centroid = Eigen::Vector3f::Zero();
+  for (int j = 0; j < h; ++j)
+    for (int i = 0; i < w; ++i)
+      if (hm.z_mm.at(i, j) > -1e29f) {
+        zb.z.at(i, j) = hm.z_mm.at(i, j);
+        cells.push_back(zb.index(i, j));
+        centroid += zb.point(i, j);
+      }
+  centroid /= float(std::max<std::size_t>(1, cells.size()));
+  AxisBuffers buf;
+  buf.keys.resize(cells.size());
+  const AxisEstimate est = estimate_axis(zb, cells.data(), int(cells.size()), centroid, cfg, model.tube_diameter_mm, &buf);
+  // Turn about Z so the measured axis lies along +X, then move the measured centre to the origin.
+  const double yaw = -std::atan2(est.axis.y(), est.axis.x());
+  Pose to_canonical = Pose::Identity();
+  to_canonical.linear() = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  to_canonical.translation() = -(to_canonical.linear() * est.centre.cast<double>());
+  return to_canonical * lying;
+}
+
+}  // namespace
+
+LocatorModel prepare_locator_model(const PipeModel& model, float margin_mm, const LocateConfig& cfg) {
+  LocatorModel lm;
+  lm.model = &model;
+  lm.tube_d_mm = model.tube_diameter_mm;
+  lm.extent_l_mm = model.extent_mm;
+  lm.centroid = model.centroid;
+  const auto& pts = model.surface.points;
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (const auto& p : pts) {
+    const Eigen::Vector3d d = (p - model.centroid).cast<double>();
+    cov += d * d.transpose();
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
+  lm.axis = eig.eigenvectors().col(2).cast<float>();
+  lm.up = eig.eigenvectors().col(0).cast<float>();
+
+  // About one ridge sample per 4 mm^2 is finer than the 2 mm ridge grid.
+  const float area = model.mesh.surface_area();
+  const std::size_t want = std::max<std::size_t>(500, std::size_t(area / 4));
+  const std::size_t stride = std::max<std::size_t>(1, pts.size() / want);
+  for (std::size_t i = 0; i < pts.size(); i += stride) lm.ridge_samples.push_back(pts[i]);
+  const std::size_t vstride = std::max<std::size_t>(1, model.mesh.vertices.size() / 64);
+  for (std::size_t i = 0; i < model.mesh.vertices.size(); i += vstride) lm.check_points.push_back(model.mesh.vertices[i]);
+
+  // Voxel index by multi-source breadth-first propagation from each sample's voxel.
+  Eigen::Vector3f lo = pts[0], hi = pts[0];
+  for (const auto& p : pts) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+  lm.voxel_origin = lo - Eigen::Vector3f::Constant(margin_mm);
+  const Eigen::Vector3f size = hi - lo + Eigen::Vector3f::Constant(2 * margin_mm);
+  lm.nx = int(size.x() / lm.voxel_mm) + 1;
+  lm.ny = int(size.y() / lm.voxel_mm) + 1;
+  lm.nz = int(size.z() / lm.voxel_mm) + 1;
+  lm.voxel_sample.assign(std::size_t(lm.nx) * lm.ny * lm.nz, -1);
+  std::vector<int> queue;
+  queue.reserve(lm.voxel_sample.size());
+  auto voxel_of = [&](const Eigen::Vector3f& p) {
+    const Eigen::Vector3f g = (p - lm.voxel_origin) / lm.voxel_mm;
+    return (std::size_t(g.z()) * lm.ny + std::size_t(g.y())) * lm.nx + std::size_t(g.x());
+  };
+  std::vector<float> best(lm.voxel_sample.size(), 1e30f);
+  auto centre_of = [&](std::size_t v) {
+    const int i = int(v % lm.nx), j = int((v / lm.nx) % lm.ny), k = int(v / (std::size_t(lm.nx) * lm.ny));
+    return Eigen::Vector3f(lm.voxel_origin + lm.voxel_mm * Eigen::Vector3f(i + 0.5f, j + 0.5f, k + 0.5f));
+  };
+  for (std::size_t s = 0; s < pts.size(); ++s) {
+    const std::size_t v = voxel_of(pts[s]);
+    const float d = (centre_of(v) - pts[s]).squaredNorm();
+    if (lm.voxel_sample[v] < 0) queue.push_back(int(v));
+    if (d < best[v]) best[v] = d, lm.voxel_sample[v] = int(s);
+  }
+  const float margin_sq = margin_mm * margin_mm;
+  for (std::size_t head = 0; head < queue.size(); ++head) {
+    const std::size_t v = std::size_t(queue[head]);
+    const int s = lm.voxel_sample[v];
+    const int i = int(v % lm.nx), j = int((v / lm.nx) % lm.ny), k = int(v / (std::size_t(lm.nx) * lm.ny));
+    const int nb[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+    for (const auto& o : nb) {
+      const int a = i + o[0], b = j + o[1], c = k + o[2];
+      if (a < 0 || b < 0 || c < 0 || a >= lm.nx || b >= lm.ny || c >= lm.nz) continue;
+      const std::size_t w = (std::size_t(c) * lm.ny + b) * lm.nx + a;
+      const float d = (centre_of(w) - pts[s]).squaredNorm();
+      if (d > margin_sq || d >= best[w]) continue;
+      if (lm.voxel_sample[w] < 0) queue.push_back(int(w));
+      best[w] = d;
+      lm.voxel_sample[w] = s;
+    }
+  }
+  // Lying frame: largest spread along X, least spread up; then the turns about X.
+  Eigen::Matrix3d lying;
+  lying.row(0) = lm.axis.cast<double>().transpose();
+  lying.row(2) = lm.up.cast<double>().transpose();
+  lying.row(1) = lying.row(2).cross(lying.row(0));
+  const int turns = std::max(1, cfg.initial_rotations);
+  for (int k = 0; k < turns; ++k)
+    lm.canonical_starts.push_back(canonical_start(
+        model, Eigen::AngleAxisd(2 * M_PI * k / turns, Eigen::Vector3d::UnitX()).toRotationMatrix() * lying, cfg));
+  return lm;
+}
+
+float pose_distance_mm(const LocatorModel& lm, const Pose& a, const Pose& b) {
+  const Eigen::Matrix4f ma = a.matrix().cast<float>();
+  float best = 1e30f;
+  auto worst_for = [&](const Eigen::Matrix4f& mb) {
+    float worst = 0;
+    for (const auto& p : lm.check_points) {
+      const Eigen::Vector3f d = (ma.topLeftCorner<3, 3>() - mb.topLeftCorner<3, 3>()) * p +
+                                (ma.topRightCorner<3, 1>() - mb.topRightCorner<3, 1>());
+      worst = std::max(worst, d.squaredNorm());
+    }
+    return std::sqrt(worst);
+  };
+  best = worst_for(b.matrix().cast<float>());
+  for (const auto& s : lm.model->symmetries) best = std::min(best, worst_for((b * s).matrix().cast<float>()));
+  return best;
+}
+
+}  // namespace pipeloc

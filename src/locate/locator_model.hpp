@@ -1,0 +1,46 @@
+// What the localizer precomputes from a pipe model at start-up: its frame (principal axis, the
+// side that faces up when it lies flat), ridge samples, and a voxel index of its surface for
+// O(1) closest-point look-ups during refinement.
+#pragma once
+
+#include <vector>
+
+#include "model/pipe_model.hpp"
+
+namespace pipeloc {
+
+struct LocatorModel {
+  const PipeModel* model = nullptr;
+  Eigen::Vector3f axis = Eigen::Vector3f::UnitX();  // direction of largest spread (model frame)
+  Eigen::Vector3f up = Eigen::Vector3f::UnitZ();    // direction of least spread
+  Eigen::Vector3f centroid = Eigen::Vector3f::Zero();
+  std::vector<Eigen::Vector3f> ridge_samples;       // subset of surface samples for the Z-ridge
+  std::vector<Eigen::Vector3f> check_points;        // vertices spread over the part, for pose distances
+  float tube_d_mm = 0, extent_l_mm = 0;
+
+  // IV-B initial states, one per turn about the axis: the model lying turned by 360/turns * k,
+  // placed so that its principal direction measured by III (the same cross-section count as on
+  // the observed region, on its own top view) lies along +X and its measured centre at the origin.
+  std::vector<Pose> canonical_starts;
+
+  // Voxel index: nearest surface sample of each voxel centre within `margin` of the surface.
+  Eigen::Vector3f voxel_origin = Eigen::Vector3f::Zero();
+  float voxel_mm = 2;
+  int nx = 0, ny = 0, nz = 0;
+  std::vector<int> voxel_sample;  // -1: further than the margin
+
+  int nearest_sample(const Eigen::Vector3f& p_model) const {
+    const Eigen::Vector3f g = (p_model - voxel_origin) / voxel_mm;
+    const int i = int(g.x()), j = int(g.y()), k = int(g.z());
+    if (g.x() < 0 || g.y() < 0 || g.z() < 0 || i >= nx || j >= ny || k >= nz) return -1;
+    return voxel_sample[(std::size_t(k) * ny + j) * nx + i];
+  }
+};
+
+struct LocateConfig;
+LocatorModel prepare_locator_model(const PipeModel& model, float margin_mm, const LocateConfig& cfg);
+
+// Largest distance of the check points between two poses, minimised over the model's symmetries.
+float pose_distance_mm(const LocatorModel& lm, const Pose& a, const Pose& b);
+
+}  // namespace pipeloc

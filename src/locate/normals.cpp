@@ -1,0 +1,68 @@
+#include "locate/normals.hpp"
+
+#include <Eigen/Dense>
+
+namespace pipeloc {
+namespace {
+
+constexpr int kSums = 9;  // n, Si, Sj, Sii, Sij, Sjj, Sz, Siz, Sjz
+
+void accumulate(const ZBuffer& zb, int j, double sign, double* column) {
+  if (j < 0 || j >= zb.height) return;
+  for (int i = 0; i < zb.width; ++i) {
+    const float z = zb.z.at(i, j);
+    if (std::isnan(z)) continue;
+    double* c = column + kSums * i;
+    c[0] += sign;
+    c[1] += sign * i;
+    c[2] += sign * j;
+    c[3] += sign * i * i;
+    c[4] += sign * i * j;
+    c[5] += sign * j * j;
+    c[6] += sign * z;
+    c[7] += sign * i * z;
+    c[8] += sign * j * z;
+  }
+}
+
+}  // namespace
+
+void reserve_normals(NormalMap* nm, const ZBuffer& zb) {
+  nm->n.resize(zb.z.width, zb.z.height, Eigen::Vector3f::Zero());
+  nm->column.assign(std::size_t(kSums) * zb.z.width, 0.0);
+}
+
+void compute_normals(const ZBuffer& zb, int window, int min_valid, NormalMap* nm) {
+  const int k = window / 2;
+  std::fill(nm->column.begin(), nm->column.end(), 0.0);
+  double* col = nm->column.data();
+  for (int j = 0; j < k && j < zb.height; ++j) accumulate(zb, j, 1, col);
+  for (int j = 0; j < zb.height; ++j) {
+    // Column sums hold rows j-k .. j+k.
+    accumulate(zb, j + k, 1, col);
+    accumulate(zb, j - k - 1, -1, col);
+    double s[kSums] = {0};
+    for (int i = 0; i < k && i < zb.width; ++i)
+      for (int q = 0; q < kSums; ++q) s[q] += col[kSums * i + q];
+    for (int i = 0; i < zb.width; ++i) {
+      if (i + k < zb.width)
+        for (int q = 0; q < kSums; ++q) s[q] += col[kSums * (i + k) + q];
+      if (i - k - 1 >= 0)
+        for (int q = 0; q < kSums; ++q) s[q] -= col[kSums * (i - k - 1) + q];
+      Eigen::Vector3f& out = nm->n.at(i, j);
+      out.setZero();
+      if (std::isnan(zb.z.at(i, j)) || s[0] < min_valid) continue;
+      // Least squares in coordinates centred on the window's mean (well conditioned).
+      const double n = s[0], mi = s[1] / n, mj = s[2] / n, mz = s[6] / n;
+      const double cii = s[3] / n - mi * mi, cij = s[4] / n - mi * mj, cjj = s[5] / n - mj * mj;
+      const double ciz = s[7] / n - mi * mz, cjz = s[8] / n - mj * mz;
+      const double det = cii * cjj - cij * cij;
+      if (det < 1e-9) continue;
+      const double a = (ciz * cjj - cjz * cij) / det;  // dz/di
+      const double b = (cjz * cii - ciz * cij) / det;  // dz/dj
+      out = Eigen::Vector3f(float(-a / zb.pixel_mm), float(-b / zb.pixel_mm), 1.0f).normalized();
+    }
+  }
+}
+
+}  // namespace pipeloc

@@ -1,0 +1,167 @@
+#include "locate/regions.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace pipeloc {
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+const int kDi[8] = {-1, 0, 1, -1, 1, -1, 0, 1};
+const int kDj[8] = {-1, -1, -1, 0, 0, 1, 1, 1};
+
+}  // namespace
+
+void reserve_regions(RegionBuffers* rb, const ZBuffer& zb, const LocateConfig& cfg, float d, float l) {
+  const std::size_t cells = zb.z.pixels.size();
+  rb->core_label.resize(zb.z.width, zb.z.height, -1);
+  rb->stamp.resize(zb.z.width, zb.z.height, 0);
+  rb->queue.assign(cells, 0);
+  rb->core_cells.assign(cells, 0);
+  // A pipe's visible region is at most about L x D; allow three times that before calling it a leak.
+  rb->max_region_cells = int(3.0 * (l + d) * d / (zb.pixel_mm * zb.pixel_mm));
+  rb->region_cells.assign(std::size_t(rb->max_region_cells) * cfg.max_candidates, 0);
+  rb->candidates.reserve(cfg.max_candidates);
+}
+
+float longest_distance(const ZBuffer& zb, const int* cells, int count) {
+  static const float dirs[13][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 1, 0}, {1, -1, 0}, {1, 0, 1}, {1, 0, -1},
+                                    {0, 1, 1}, {0, 1, -1}, {1, 1, 1}, {1, 1, -1}, {1, -1, 1}, {-1, 1, 1}};
+  int extreme[26];
+  float best[26];
+  for (int d = 0; d < 26; ++d) best[d] = -1e30f, extreme[d] = cells[0];
+  const int w = zb.z.width;
+  for (int c = 0; c < count; ++c) {
+    const Eigen::Vector3f p = zb.point(cells[c] % w, cells[c] / w);
+    for (int d = 0; d < 13; ++d) {
+      const float s = p.x() * dirs[d][0] + p.y() * dirs[d][1] + p.z() * dirs[d][2];
+      if (s > best[2 * d]) best[2 * d] = s, extreme[2 * d] = cells[c];
+      if (-s > best[2 * d + 1]) best[2 * d + 1] = -s, extreme[2 * d + 1] = cells[c];
+    }
+  }
+  float longest = 0;
+  for (int a = 0; a < 26; ++a)
+    for (int b = a + 1; b < 26; ++b)
+      longest = std::max(longest, (zb.point(extreme[a] % w, extreme[a] / w) - zb.point(extreme[b] % w, extreme[b] / w)).norm());
+  return longest;
+}
+
+RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, const LocateConfig& cfg, float d,
+                                      float l, RegionBuffers* rb) {
+  RegionStats stats;
+  rb->candidates.clear();
+  const int w = zb.z.width;
+  const float up_min = float(std::cos(cfg.upward_normal_max_deg * kDeg));
+  const float cont_min = float(std::cos(cfg.continuity_max_deg * kDeg));
+  const float step_max = float(cfg.continuity_step_max_mm);
+  const float cell_area = float(zb.pixel_mm * zb.pixel_mm);
+  const float area_min = float(cfg.core_min_area_of_d2) * d * d;
+  const float core_extent_max = float(cfg.core_max_extent_of_l) * l;
+
+  for (int j = 0; j < zb.height; ++j) std::fill_n(&rb->core_label.at(0, j), zb.width, -1);
+  auto is_core = [&](int i, int j) { return nm.n.at(i, j).z() > up_min; };
+
+  // 1. Connected regions (8-connectivity) of upward normals with A_n >= A_th.
+  struct Core {
+    int begin, end;
+    float area;
+  };
+  int pool = 0;
+  // Cores are kept in the pool in discovery order; their list is small and lives on the stack.
+  constexpr int kMaxCores = 256;
+  Core cores[kMaxCores];
+  int n_cores = 0;
+  for (int j = 0; j < zb.height; ++j) {
+    for (int i = 0; i < zb.width; ++i) {
+      if (rb->core_label.at(i, j) != -1 || !is_core(i, j)) continue;
+      ++stats.core_regions;
+      const int begin = pool;
+      rb->core_label.at(i, j) = n_cores;
+      rb->core_cells[pool++] = zb.index(i, j);
+      for (int head = begin; head < pool; ++head) {
+        const int ci = rb->core_cells[head] % w, cj = rb->core_cells[head] / w;
+        for (int k = 0; k < 8; ++k) {
+          const int ni = ci + kDi[k], nj = cj + kDj[k];
+          if (ni < 0 || nj < 0 || ni >= zb.width || nj >= zb.height) continue;
+          if (rb->core_label.at(ni, nj) != -1 || !is_core(ni, nj)) continue;
+          rb->core_label.at(ni, nj) = n_cores;
+          rb->core_cells[pool++] = zb.index(ni, nj);
+        }
+      }
+      const float area = float(pool - begin) * cell_area;
+      const bool keep = area >= area_min && n_cores < kMaxCores &&
+                        longest_distance(zb, &rb->core_cells[begin], pool - begin) <= core_extent_max;
+      if (keep) {
+        cores[n_cores++] = {begin, pool, area};
+      } else {
+        for (int c = begin; c < pool; ++c) rb->core_label.pixels[rb->core_cells[c]] = -2;  // seen, dropped
+        pool = begin;
+      }
+    }
+  }
+  stats.cores_kept = n_cores;
+  // Most promising first: the largest cores are the least covered pipes.
+  std::sort(cores, cores + n_cores, [](const Core& a, const Core& b) { return a.area > b.area; });
+
+  // 2. Grow each core while the normal of a neighbour is close to that of the boundary cell.
+  int region_pool = 0;
+  for (int c = 0; c < n_cores && int(rb->candidates.size()) < cfg.max_candidates; ++c) {
+    const int stamp = ++rb->stamp_value;
+    int* cells = &rb->region_cells[region_pool];
+    int count = 0;
+    Eigen::Vector3f centroid = Eigen::Vector3f::Zero();
+    for (int k = cores[c].begin; k < cores[c].end && count < rb->max_region_cells; ++k) {
+      cells[count++] = rb->core_cells[k];
+      rb->stamp.pixels[rb->core_cells[k]] = stamp;
+      centroid += zb.point(rb->core_cells[k] % w, rb->core_cells[k] / w);
+    }
+    centroid /= float(cores[c].end - cores[c].begin);
+    bool leaked = false;
+    for (int head = 0; head < count; ++head) {
+      const int ci = cells[head] % w, cj = cells[head] / w;
+      const Eigen::Vector3f& ni_n = nm.n.at(ci, cj);
+      const float zi = zb.z.at(ci, cj);
+      for (int k = 0; k < 8; ++k) {
+        const int ni = ci + kDi[k], nj = cj + kDj[k];
+        if (ni < 0 || nj < 0 || ni >= zb.width || nj >= zb.height) continue;
+        int& s = rb->stamp.at(ni, nj);
+        if (s == stamp) continue;
+        const Eigen::Vector3f& nn = nm.n.at(ni, nj);
+        if (nn.z() == 0 && nn.x() == 0) continue;  // no normal
+        if (nn.dot(ni_n) <= cont_min || std::abs(zb.z.at(ni, nj) - zi) > step_max) continue;
+        if (count >= rb->max_region_cells) {
+          leaked = true;
+          break;
+        }
+        s = stamp;
+        cells[count++] = zb.index(ni, nj);
+      }
+      if (leaked) break;
+    }
+    if (leaked) continue;  // spread over far more than one pipe: not a pipe lying on others
+    // A pipe's top is convex: the cells grown around its core lie lower than the core. A patch of
+    // floor between pipes grows up their sides instead.
+    const int core_count = cores[c].end - cores[c].begin;
+    double core_z = 0, side_z = 0;
+    for (int k = 0; k < count; ++k) (k < core_count ? core_z : side_z) += zb.z.pixels[std::size_t(cells[k])];
+    if (count - core_count < core_count / 2) continue;
+    if (side_z / (count - core_count) > core_z / core_count - cfg.convexity_min_of_d * d) continue;
+    // 3. Keep regions longer than a * L.
+    const float extent = longest_distance(zb, cells, count);
+    if (extent <= float(cfg.region_min_extent_of_l) * l) continue;
+    CandidateRegion r;
+    r.core_begin = cores[c].begin;
+    r.core_end = cores[c].end;
+    r.cells_begin = region_pool;
+    r.cells_end = region_pool + count;
+    r.core_centroid = centroid;
+    r.core_area_mm2 = cores[c].area;
+    r.extent_mm = extent;
+    rb->candidates.push_back(r);
+    region_pool += rb->max_region_cells;
+  }
+  stats.candidates = int(rb->candidates.size());
+  return stats;
+}
+
+}  // namespace pipeloc

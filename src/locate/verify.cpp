@@ -1,0 +1,28 @@
+#include "locate/verify.hpp"
+
+#include "render/raster.hpp"
+
+namespace pipeloc {
+
+Verification verify_pose(const Mesh& mesh, const Pose& model_to_cam, const Image<float>& depth, const Intrinsics& k,
+                         float tol, Image<float>* scratch) {
+  Verification v;
+  const PixelBox box = render_depth_in_box(mesh, model_to_cam, k, scratch);
+  for (int y = box.y0; y <= box.y1; ++y)
+    for (int x = box.x0; x <= box.x1; ++x) {
+      const float zm = scratch->at(x, y);
+      if (zm <= 0) continue;
+      ++v.model_px;
+      const float zo = depth.at(x, y);
+      if (!(zo > 0)) continue;  // no reading: neither for nor against
+      if (zo > zm + tol)
+        ++v.free_space_px;
+      else if (zo < zm - tol)
+        ++v.occluded_px;
+      else
+        ++v.agree_px;
+    }
+  return v;
+}
+
+}  // namespace pipeloc

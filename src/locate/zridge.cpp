@@ -1,0 +1,60 @@
+#include "locate/zridge.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace pipeloc {
+
+void reserve_ridge(RidgeBuffers* rb, float max_extent_mm, float cell_mm) {
+  rb->cols = rb->rows = int(std::ceil(max_extent_mm / cell_mm)) + 2;
+  rb->top_z.assign(std::size_t(rb->cols) * rb->rows, 0.f);
+  rb->top_p.assign(std::size_t(rb->cols) * rb->rows, Eigen::Vector3f::Zero());
+}
+
+int extract_zridge(const Eigen::Vector3f* pts, int count, const Eigen::Vector2f& axis, float cell, float min_run_mm,
+                   RidgeBuffers* rb, Eigen::Vector3f* out, int capacity) {
+  if (count == 0) return 0;
+  const Eigen::Vector2f across(-axis.y(), axis.x());
+  float u0 = 1e30f, u1 = -1e30f, v0 = 1e30f, v1 = -1e30f;
+  for (int k = 0; k < count; ++k) {
+    const float u = pts[k].head<2>().dot(axis), v = pts[k].head<2>().dot(across);
+    u0 = std::min(u0, u), u1 = std::max(u1, u), v0 = std::min(v0, v), v1 = std::max(v1, v);
+  }
+  // Rows are lines across the axis (fixed u); columns run across (v).
+  const int rows = std::min(rb->rows, int((u1 - u0) / cell) + 1);
+  const int cols = std::min(rb->cols, int((v1 - v0) / cell) + 1);
+  constexpr float kNone = -std::numeric_limits<float>::infinity();
+  std::fill_n(rb->top_z.begin(), std::size_t(rows) * cols, kNone);
+  for (int k = 0; k < count; ++k) {
+    const int r = int((pts[k].head<2>().dot(axis) - u0) / cell);
+    const int c = int((pts[k].head<2>().dot(across) - v0) / cell);
+    if (r < 0 || c < 0 || r >= rows || c >= cols) continue;
+    float& z = rb->top_z[std::size_t(r) * cols + c];
+    if (pts[k].z() > z) z = pts[k].z(), rb->top_p[std::size_t(r) * cols + c] = pts[k];
+  }
+  const int min_run = std::max(1, int(min_run_mm / cell));
+  int n = 0;
+  for (int r = 0; r < rows && n < capacity; ++r) {
+    const float* zr = &rb->top_z[std::size_t(r) * cols];
+    int c = 0;
+    while (c < cols && n < capacity) {
+      if (zr[c] == kNone) {
+        ++c;
+        continue;
+      }
+      // A run tolerates one empty cell (sampling gaps).
+      int best = c, end = c;
+      while (end + 1 < cols && (zr[end + 1] != kNone || (end + 2 < cols && zr[end + 2] != kNone))) {
+        ++end;
+        if (zr[end] != kNone && zr[end] > zr[best]) best = end;
+      }
+      // Peaks at the edge of a run are slopes, not ridges.
+      if (end - c + 1 >= min_run && best != c && best != end) out[n++] = rb->top_p[std::size_t(r) * cols + best];
+      c = end + 1;
+    }
+  }
+  return n;
+}
+
+}  // namespace pipeloc

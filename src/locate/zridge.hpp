@@ -1,0 +1,24 @@
+// IV-A: the Z-ridge. With the principal axis along X, the points nearest the camera along each
+// line across the axis: per line and per run of occupied cells, the highest point.
+#pragma once
+
+#include <vector>
+
+#include "core/pose.hpp"
+
+namespace pipeloc {
+
+struct RidgeBuffers {
+  int cols = 0, rows = 0;               // capacity of the axis-aligned grid
+  std::vector<float> top_z;             // per cell: highest z
+  std::vector<Eigen::Vector3f> top_p;   // per cell: that point
+};
+
+void reserve_ridge(RidgeBuffers* rb, float max_extent_mm, float cell_mm);
+
+// points: bin frame. axis: unit in XY. Writes at most `capacity` ridge points to out and
+// returns their count. Runs narrower than min_run_mm are ignored (noise, pipe ends).
+int extract_zridge(const Eigen::Vector3f* points, int count, const Eigen::Vector2f& axis, float cell_mm,
+                   float min_run_mm, RidgeBuffers* rb, Eigen::Vector3f* out, int capacity);
+
+}  // namespace pipeloc

@@ -1,0 +1,84 @@
+#include "report/locate_overlay.hpp"
+
+#include <algorithm>
+
+#include "render/raster.hpp"
+
+namespace pipeloc {
+namespace {
+
+const Rgb kRegion{170, 90, 220}, kCore{40, 110, 255}, kAxis{255, 150, 0}, kRidge{40, 230, 60},
+    kOutline{255, 235, 60}, kOther{150, 150, 150}, kPick{255, 30, 30};
+
+Eigen::Vector2d to_pixel(const CameraInfo& cam, const Pose& bin_to_cam, const Eigen::Vector3f& p_bin) {
+  return cam.intrinsics.project(bin_to_cam * p_bin.cast<double>());
+}
+
+void draw_outline(Image<Rgb>* img, const Mesh& mesh, const Pose& model_to_cam, const Intrinsics& k, Rgb color,
+                  int thickness, Image<float>* scratch) {
+  const PixelBox box = render_depth_in_box(mesh, model_to_cam, k, scratch);
+  for (int y = box.y0; y <= box.y1; ++y)
+    for (int x = box.x0; x <= box.x1; ++x) {
+      if (scratch->at(x, y) <= 0) continue;
+      const bool edge = x == box.x0 || y == box.y0 || x == box.x1 || y == box.y1 || scratch->at(x - 1, y) <= 0 ||
+                        scratch->at(x + 1, y) <= 0 || scratch->at(x, y - 1) <= 0 || scratch->at(x, y + 1) <= 0;
+      if (edge) draw_dot(img, x, y, thickness / 2, color);
+    }
+}
+
+}  // namespace
+
+Image<Rgb> draw_locate_overlay(const Locator& loc, const Image<float>& depth, const CameraInfo& cam) {
+  Image<Rgb> img = shade_depth(depth);
+  for (auto& p : img.pixels) {  // grey it down so the findings stand out
+    const std::uint8_t g = std::uint8_t((p.r + p.g + p.b) / 3 * 0.7);
+    p = {g, g, g};
+  }
+  const Pose bin_to_cam = bin_to_camera(cam);
+  const ZBuffer& zb = loc.zbuffer();
+  const RegionBuffers& rb = loc.regions();
+  const int w = zb.z.width;
+  const LocateOutput& out = loc.output();
+  for (std::size_t c = 0; c < rb.candidates.size(); ++c) {
+    const CandidateRegion& r = rb.candidates[c];
+    for (int k = r.cells_begin; k < r.cells_end; ++k) {
+      const int cell = rb.region_cells[std::size_t(k)];
+      const Eigen::Vector2d px = to_pixel(cam, bin_to_cam, zb.point(cell % w, cell / w));
+      tint(&img, int(std::lround(px.x())), int(std::lround(px.y())), kRegion, 0.45f);
+    }
+    for (int k = r.core_begin; k < r.core_end; ++k) {
+      const int cell = rb.core_cells[std::size_t(k)];
+      const Eigen::Vector2d px = to_pixel(cam, bin_to_cam, zb.point(cell % w, cell / w));
+      tint(&img, int(std::lround(px.x())), int(std::lround(px.y())), kCore, 0.6f);
+    }
+  }
+  Image<float> scratch(depth.width, depth.height, 0.0f);
+  const Mesh& mesh = loc.locator_model().model->mesh;
+  const int pick = out.pick();
+  for (int i = int(out.estimates.size()) - 1; i >= 0; --i) {
+    const PipeEstimate& e = out.estimates[std::size_t(i)];
+    draw_outline(&img, mesh, e.model_to_cam, cam.intrinsics, i == pick ? kPick : e.pickable ? kOutline : kOther,
+                 i == pick ? 3 : 1, &scratch);
+  }
+  for (std::size_t c = 0; c < out.traces.size(); ++c) {
+    const CandidateTrace& t = out.traces[c];
+    const float half = loc.locator_model().extent_l_mm / 2;
+    const Eigen::Vector3f dir(t.axis.axis.x(), t.axis.axis.y(), 0);
+    const Eigen::Vector2d a = to_pixel(cam, bin_to_cam, t.axis.centre - half * dir);
+    const Eigen::Vector2d b = to_pixel(cam, bin_to_cam, t.axis.centre + half * dir);
+    draw_line(&img, a.x(), a.y(), b.x(), b.y(), kAxis, 1);
+    for (int k = 0; k < t.ridge_count; ++k) {
+      const Eigen::Vector2d p = to_pixel(cam, bin_to_cam, loc.ridge_points()[std::size_t(t.ridge_begin + k)]);
+      draw_dot(&img, p.x(), p.y(), 0, kRidge);
+    }
+  }
+  if (pick >= 0) {
+    const Pose& p = out.estimates[std::size_t(pick)].model_to_cam;
+    const Eigen::Vector2d c = cam.intrinsics.project(p * loc.locator_model().centroid.cast<double>());
+    draw_line(&img, c.x() - 8, c.y() - 8, c.x() + 8, c.y() + 8, kPick, 3);
+    draw_line(&img, c.x() - 8, c.y() + 8, c.x() + 8, c.y() - 8, kPick, 3);
+  }
+  return img;
+}
+
+}  // namespace pipeloc
