@@ -82,8 +82,10 @@ void add_locate(CLI::App& app) {
                  st.zbuffer_ms, st.normals_ms, st.regions_ms, st.axis_ms, st.ridge_icp_ms, st.refine_ms, st.verify_ms);
     for (std::size_t c = 0; c < out.traces.size(); ++c) {
       const CandidateTrace& tr = out.traces[c];
-      spdlog::info("candidate {}: {} (ridge points {}, ridge residual {:.2f} mm, axis sections {})", c,
-                   outcome_name(tr.outcome), tr.ridge_count, tr.ridge_cost_mm, tr.axis.best_count);
+      spdlog::info("candidate {}: {} (ridge points {}, ridge residual {:.2f} mm, axis sections {}, agreement {:.2f}, "
+                   "free space {:.2f}, occluded {:.2f})",
+                   c, outcome_name(tr.outcome), tr.ridge_count, tr.ridge_cost_mm, tr.axis.best_count,
+                   tr.check.agreement(), tr.check.free_space(), tr.check.occluded());
     }
     if (!opt->overlay.empty()) {
       write_rgb_png(opt->overlay, draw_locate_overlay(locator, depth, sized));

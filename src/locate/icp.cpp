@@ -26,7 +26,7 @@ int model_ridge(const LocatorModel& lm, const Pose& pose, const Eigen::Vector2f&
   const int n = int(lm.ridge_samples.size());
   for (int i = 0; i < n; ++i) buf->moved[i] = r * lm.ridge_samples[i] + t;
   return extract_zridge(buf->moved.data(), n, axis, float(cfg.ridge_cell_mm), 0.3f * lm.tube_d_mm, &buf->ridge,
-                        buf->model_ridge.data(), int(buf->model_ridge.size()));
+                        buf->model_ridge.data(), int(buf->model_ridge.size()), cfg.match_surface);
 }
 
 // Mean of min(distance, cap) from each of a to its nearest in b.
@@ -72,13 +72,14 @@ Pose fit_rigid(const Eigen::Vector3f* src, const Eigen::Vector3f* dst, int n) {
 }
 
 RidgeFit ridge_icp(const LocatorModel& lm, const Pose& start, const Eigen::Vector3f* obs, int n_obs,
-                   const Eigen::Vector2f& axis, const LocateConfig& cfg, IcpBuffers* buf) {
+                   const Eigen::Vector2f& axis, const LocateConfig& cfg, int max_iterations, IcpBuffers* buf,
+                   float gate_mm) {
   RidgeFit fit;
   fit.pose = start;
   const float d = lm.tube_d_mm;
   // Correspondences farther than this are dropped; it shrinks from a third of the pipe to D/2.
-  float gate = std::max(lm.extent_l_mm / 3, d);
-  for (int it = 0; it < cfg.icp_max_iterations; ++it) {
+  float gate = gate_mm > 0 ? gate_mm : std::max(lm.extent_l_mm / 3, d);
+  for (int it = 0; it < max_iterations; ++it) {
     fit.iterations = it + 1;
     const int nm = model_ridge(lm, fit.pose, axis, cfg, buf);  // 2.2.1
     int pairs = 0;
@@ -110,6 +111,7 @@ RidgeFit ridge_icp(const LocatorModel& lm, const Pose& start, const Eigen::Vecto
   }
   const int nm = model_ridge(lm, fit.pose, axis, cfg, buf);
   fit.model_ridge_points = nm;
+  fit.gate_mm = gate;
   const float cap = 0.5f * d;
   const float m2o = truncated_mean(buf->model_ridge.data(), nm, obs, n_obs, cap, &fit.matched);
   const float o2m = truncated_mean(obs, n_obs, buf->model_ridge.data(), nm, cap, nullptr);

@@ -37,20 +37,28 @@ const char* outcome_name(CandidateOutcome o) {
 }
 
 Locator::Locator(const PipeModel& model, const LocateConfig& cfg, const Intrinsics& camera)
-    : model_(model), cfg_(cfg) {
+    : model_(model), cfg_(cfg), workers_(std::size_t(std::max(1, cfg.threads))), pool_(std::max(1, cfg.threads)) {
   lm_ = prepare_locator_model(model, float(cfg.refine_inlier_mm) + 4.0f, cfg);
   reserve_zbuffer(&zb_, cfg.zbuffer_max_side_mm, cfg.zbuffer_pixel_mm);
   reserve_normals(&nm_, zb_);
   hole_scratch_.assign(zb_.z.pixels.size(), 0.0f);
   reserve_regions(&rb_, zb_, cfg, lm_.tube_d_mm, lm_.extent_l_mm);
-  ab_.keys.assign(std::size_t(rb_.max_region_cells), 0);
+
   // A ridge point per ridge cell along the pipe, for a pipe folded onto itself twice.
   ridge_capacity_ = int(3 * (lm_.extent_l_mm + 2 * lm_.tube_d_mm) / cfg.ridge_cell_mm) + 16;
-  reserve_icp(&icp_, lm_, ridge_capacity_, float(cfg.ridge_cell_mm));
+  if (cfg.match_surface)  // every ridge cell of the region, not one per line
+    ridge_capacity_ = int(rb_.max_region_cells * cfg.zbuffer_pixel_mm * cfg.zbuffer_pixel_mm /
+                          (cfg.ridge_cell_mm * cfg.ridge_cell_mm)) + 16;
+  for (Worker& wk : workers_) {
+    wk.ab.keys.assign(std::size_t(rb_.max_region_cells), 0);
+    reserve_icp(&wk.icp, lm_, ridge_capacity_, float(cfg.ridge_cell_mm));
+    wk.region_pts.assign(std::size_t(rb_.max_region_cells), Eigen::Vector3f::Zero());
+    wk.fits.reserve(std::size_t(2 * std::max(1, cfg.initial_rotations)));
+    wk.scratch_depth.resize(camera.width, camera.height, 0.0f);
+  }
   ridge_pts_.assign(std::size_t(ridge_capacity_) * cfg.max_candidates, Eigen::Vector3f::Zero());
-  region_pts_.assign(std::size_t(rb_.max_region_cells), Eigen::Vector3f::Zero());
-  fits_.reserve(std::size_t(2 * std::max(1, cfg.initial_rotations)));
-  scratch_depth_.resize(camera.width, camera.height, 0.0f);
+  slot_.resize(std::size_t(cfg.max_candidates));
+  slot_filled_.assign(std::size_t(cfg.max_candidates), 0);
   out_.estimates.reserve(std::size_t(cfg.max_candidates));
   out_.traces.reserve(std::size_t(cfg.max_candidates));
 }
@@ -79,13 +87,22 @@ const LocateOutput& Locator::locate(const Image<float>& depth, const CameraInfo&
   out_.regions = extract_candidate_regions(zb_, nm_, cfg_, lm_.tube_d_mm, lm_.extent_l_mm, &rb_);
   out_.times.regions_ms = ms_since(t);
 
-  for (int c = 0; c < int(rb_.candidates.size()); ++c) {
-    out_.traces.emplace_back();
-    if (Clock::now() >= deadline) {
-      out_.budget_exhausted = true;
-      continue;
-    }
-    work_candidate(c, depth, camera, bin_to_cam);
+  // Candidates are independent: the pool works them, best first, until the deadline.
+  const int n = int(rb_.candidates.size());
+  out_.traces.resize(std::size_t(n));
+  std::fill(slot_filled_.begin(), slot_filled_.end(), 0);
+  for (Worker& wk : workers_) wk.times = {};
+  Frame frame{this, &depth, &camera, bin_to_cam, deadline};
+  pool_.run(n, &Locator::candidate_task, &frame);
+  for (const Worker& wk : workers_) {
+    out_.times.axis_ms += wk.times.axis_ms;
+    out_.times.ridge_icp_ms += wk.times.ridge_icp_ms;
+    out_.times.refine_ms += wk.times.refine_ms;
+    out_.times.verify_ms += wk.times.verify_ms;
+  }
+  for (int c = 0; c < n; ++c) {
+    if (out_.traces[std::size_t(c)].outcome == CandidateOutcome::budget) out_.budget_exhausted = true;
+    if (slot_filled_[std::size_t(c)]) merge_estimate(c);
   }
 
   // 7. Rank: best score first; the first pickable one is the pick handed to the PLC.
@@ -96,7 +113,31 @@ const LocateOutput& Locator::locate(const Image<float>& depth, const CameraInfo&
   return out_;
 }
 
-void Locator::work_candidate(int c, const Image<float>& depth, const CameraInfo& camera, const Pose& bin_to_cam) {
+void Locator::candidate_task(void* frame, int c, int worker) {
+  const Frame& f = *static_cast<const Frame*>(frame);
+  if (Clock::now() >= f.deadline) return;  // trace stays "budget"
+  f.self->work_candidate(c, f.self->workers_[std::size_t(worker)], *f.depth, *f.camera, f.bin_to_cam);
+}
+
+void Locator::merge_estimate(int c) {
+  PipeEstimate& e = slot_[std::size_t(c)];
+  CandidateTrace& trace = out_.traces[std::size_t(c)];
+  // Two regions of one pipe give one estimate: keep the better.
+  for (auto& other : out_.estimates) {
+    if (pose_distance_mm(lm_, other.model_to_bin, e.model_to_bin) > 2 * lm_.tube_d_mm) continue;
+    if (other.check.agreement() >= e.check.agreement()) {
+      trace.outcome = CandidateOutcome::duplicate;
+      return;
+    }
+    out_.traces[std::size_t(other.candidate)].outcome = CandidateOutcome::duplicate;
+    other = e;
+    return;
+  }
+  out_.estimates.push_back(e);
+}
+
+void Locator::work_candidate(int c, Worker& wk, const Image<float>& depth, const CameraInfo& camera,
+                             const Pose& bin_to_cam) {
   const CandidateRegion& region = rb_.candidates[std::size_t(c)];
   CandidateTrace& trace = out_.traces[std::size_t(c)];
   const int* cells = &rb_.region_cells[std::size_t(region.cells_begin)];
@@ -106,34 +147,48 @@ void Locator::work_candidate(int c, const Image<float>& depth, const CameraInfo&
 
   // III: principal direction and initial position.
   auto t = Clock::now();
-  trace.axis = estimate_axis(zb_, cells, count, region.core_centroid, cfg_, d, &ab_);
-  out_.times.axis_ms += ms_since(t);
+  trace.axis = estimate_axis(zb_, cells, count, region.core_centroid, cfg_, d, &wk.ab);
+  wk.times.axis_ms += ms_since(t);
 
   // IV-A: observed Z-ridge of the region.
   t = Clock::now();
-  for (int k = 0; k < count; ++k) region_pts_[std::size_t(k)] = zb_.point(cells[k] % w, cells[k] / w);
+  for (int k = 0; k < count; ++k) wk.region_pts[std::size_t(k)] = zb_.point(cells[k] % w, cells[k] / w);
   Eigen::Vector3f* ridge = &ridge_pts_[std::size_t(c) * ridge_capacity_];
   trace.ridge_begin = c * ridge_capacity_;
-  trace.ridge_count = extract_zridge(region_pts_.data(), count, trace.axis.axis, float(cfg_.ridge_cell_mm), 0.3f * d,
-                                     &icp_.ridge, ridge, ridge_capacity_);
+  trace.ridge_count = extract_zridge(wk.region_pts.data(), count, trace.axis.axis, float(cfg_.ridge_cell_mm), 0.3f * d,
+                                     &wk.icp.ridge, ridge, ridge_capacity_, cfg_.match_surface);
   if (trace.ridge_count < 10) {
     trace.outcome = CandidateOutcome::few_ridge_points;
-    out_.times.ridge_icp_ms += ms_since(t);
+    wk.times.ridge_icp_ms += ms_since(t);
     return;
   }
 
   // IV-B, Algorithm 2: ICP from 2 x initial_rotations states; keep the least residual.
-  fits_.clear();
+  wk.fits.clear();
+  // All 2 x turns states get a few iterations; the most promising continue to convergence.
   const int turns = std::max(1, cfg_.initial_rotations);
   for (int dir = 0; dir < 2; ++dir)
     for (int r = 0; r < turns; ++r)
-      fits_.push_back(ridge_icp(lm_, initial_state(lm_, trace.axis, dir == 1, r), ridge,
-                                trace.ridge_count, trace.axis.axis, cfg_, &icp_));
-  std::sort(fits_.begin(), fits_.end(), [](const RidgeFit& x, const RidgeFit& y) { return x.cost_mm < y.cost_mm; });
-  out_.times.ridge_icp_ms += ms_since(t);
-  trace.ridge_pose = fits_[0].pose;
-  trace.ridge_cost_mm = fits_[0].cost_mm;
-  if (fits_[0].cost_mm > float(cfg_.residual_max_of_d) * d) {
+      wk.fits.push_back(ridge_icp(lm_, initial_state(lm_, trace.axis, dir == 1, r), ridge, trace.ridge_count,
+                                  trace.axis.axis, cfg_, cfg_.icp_probe_iterations, &wk.icp));
+  std::sort(wk.fits.begin(), wk.fits.end(), [](const RidgeFit& x, const RidgeFit& y) { return x.cost_mm < y.cost_mm; });
+  const int keep = std::min(int(wk.fits.size()), cfg_.icp_continued_states);
+  for (int i = 0; i < keep; ++i) {
+    RidgeFit& f = wk.fits[std::size_t(i)];
+    const int done = f.iterations;
+    f = ridge_icp(lm_, f.pose, ridge, trace.ridge_count, trace.axis.axis, cfg_,
+                  std::max(1, cfg_.icp_max_iterations - done), &wk.icp, f.gate_mm);
+  }
+  wk.fits.resize(std::size_t(keep));
+  // The refinement needs far fewer points than the region holds: keep an even subset.
+  const int stride = std::max(1, count / cfg_.refine_max_points);
+  int refine_count = 0;
+  for (int k = 0; k < count; k += stride) wk.region_pts[std::size_t(refine_count++)] = wk.region_pts[std::size_t(k)];
+  std::sort(wk.fits.begin(), wk.fits.end(), [](const RidgeFit& x, const RidgeFit& y) { return x.cost_mm < y.cost_mm; });
+  wk.times.ridge_icp_ms += ms_since(t);
+  trace.ridge_pose = wk.fits[0].pose;
+  trace.ridge_cost_mm = wk.fits[0].cost_mm;
+  if (wk.fits[0].cost_mm > float(cfg_.residual_max_of_d) * d) {
     trace.outcome = CandidateOutcome::residual_too_high;
     return;
   }
@@ -146,25 +201,25 @@ void Locator::work_candidate(int c, const Image<float>& depth, const CameraInfo&
   bool have_best = false, have_second = false;
   auto quality = [](const Verification& v) { return v.agreement() - 2 * v.free_space(); };
   int tried = 0;
-  for (std::size_t i = 0; i < fits_.size() && tried < cfg_.verify_hypotheses; ++i) {
-    if (fits_[i].cost_mm > float(cfg_.residual_max_of_d) * d) break;
+  for (std::size_t i = 0; i < wk.fits.size() && tried < cfg_.verify_hypotheses; ++i) {
+    if (wk.fits[i].cost_mm > float(cfg_.residual_max_of_d) * d) break;
     bool seen = false;
     for (std::size_t j = 0; j < i && !seen; ++j)
-      seen = fits_[j].cost_mm <= float(cfg_.residual_max_of_d) * d &&
-             pose_distance_mm(lm_, fits_[i].pose, fits_[j].pose) < float(cfg_.ambiguity_pose_mm);
+      seen = wk.fits[j].cost_mm <= float(cfg_.residual_max_of_d) * d &&
+             pose_distance_mm(lm_, wk.fits[i].pose, wk.fits[j].pose) < float(cfg_.ambiguity_pose_mm);
     if (seen) continue;
     ++tried;
     t = Clock::now();
-    const RefineResult refined = refine_on_surface(lm_, fits_[i].pose, region_pts_.data(), count, cfg_);
-    out_.times.refine_ms += ms_since(t);
+    const RefineResult refined = refine_on_surface(lm_, wk.fits[i].pose, wk.region_pts.data(), refine_count, cfg_);
+    wk.times.refine_ms += ms_since(t);
     t = Clock::now();
     PipeEstimate e;
     e.model_to_bin = refined.pose;
     e.model_to_cam = bin_to_cam * refined.pose;
     e.check = verify_pose(model_.mesh, e.model_to_cam, depth, camera.intrinsics, float(cfg_.verify_tolerance_mm),
-                          &scratch_depth_);
-    out_.times.verify_ms += ms_since(t);
-    e.ridge_cost_mm = fits_[i].cost_mm;
+                          &wk.scratch_depth);
+    wk.times.verify_ms += ms_since(t);
+    e.ridge_cost_mm = wk.fits[i].cost_mm;
     e.ridge_points = trace.ridge_count;
     e.refine_inliers = refined.inliers;
     e.refine_rms_mm = refined.rms_mm;
@@ -179,6 +234,7 @@ void Locator::work_candidate(int c, const Image<float>& depth, const CameraInfo&
     }
   }
   PipeEstimate& e = best;
+  trace.check = e.check;
   if (e.check.agreement() < float(cfg_.verify_min_agreement) || e.check.free_space() > float(cfg_.verify_max_free_space)) {
     trace.outcome = CandidateOutcome::not_confirmed;
     return;
@@ -189,20 +245,9 @@ void Locator::work_candidate(int c, const Image<float>& depth, const CameraInfo&
   e.ambiguous = ambiguous;
   e.score = e.check.agreement() * (1.0f - e.check.occluded()) * (ambiguous ? 0.5f : 1.0f);
   e.pickable = !ambiguous && e.check.occluded() <= float(cfg_.verify_max_occluded);
-  // Two regions of one pipe give one estimate: keep the better.
-  for (auto& other : out_.estimates) {
-    if (pose_distance_mm(lm_, other.model_to_bin, e.model_to_bin) > 2 * d) continue;
-    if (other.check.agreement() >= e.check.agreement()) {
-      trace.outcome = CandidateOutcome::duplicate;
-      return;
-    }
-    out_.traces[std::size_t(other.candidate)].outcome = CandidateOutcome::duplicate;
-    other = e;
-    trace.outcome = CandidateOutcome::accepted;
-    return;
-  }
   trace.outcome = CandidateOutcome::accepted;
-  out_.estimates.push_back(e);
+  slot_[std::size_t(c)] = e;
+  slot_filled_[std::size_t(c)] = 1;
 }
 
 }  // namespace pipeloc

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "core/camera.hpp"
+#include "core/worker_pool.hpp"
 #include "locate/icp.hpp"
 #include "locate/principal_axis.hpp"
 #include "locate/regions.hpp"
@@ -36,6 +37,7 @@ struct CandidateTrace {
   int ridge_begin = 0, ridge_count = 0;  // observed ridge points in Locator::ridge_points()
   Pose ridge_pose = Pose::Identity();     // after Algorithm 2, before refinement
   float ridge_cost_mm = 0;
+  Verification check;                     // of the best refined fit
   CandidateOutcome outcome = CandidateOutcome::budget;
 };
 
@@ -77,7 +79,25 @@ class Locator {
   const LocateConfig& config() const { return cfg_; }
 
  private:
-  void work_candidate(int c, const Image<float>& depth, const CameraInfo& camera, const Pose& bin_to_cam);
+  // Per-thread working memory for candidates.
+  struct Worker {
+    AxisBuffers ab;
+    IcpBuffers icp;
+    std::vector<Eigen::Vector3f> region_pts;
+    std::vector<RidgeFit> fits;
+    Image<float> scratch_depth;
+    StageTimes times;
+  };
+  struct Frame {  // what the candidate tasks of one locate() share
+    Locator* self;
+    const Image<float>* depth;
+    const CameraInfo* camera;
+    Pose bin_to_cam;
+    Clock::time_point deadline;
+  };
+  static void candidate_task(void* frame, int c, int worker);
+  void work_candidate(int c, Worker& wk, const Image<float>& depth, const CameraInfo& camera, const Pose& bin_to_cam);
+  void merge_estimate(int c);
 
   const PipeModel& model_;
   LocateConfig cfg_;
@@ -86,12 +106,11 @@ class Locator {
   NormalMap nm_;
   std::vector<float> hole_scratch_;
   RegionBuffers rb_;
-  AxisBuffers ab_;
-  IcpBuffers icp_;
+  std::vector<Worker> workers_;
+  WorkerPool pool_;
   std::vector<Eigen::Vector3f> ridge_pts_;   // observed ridges of all candidates
-  std::vector<Eigen::Vector3f> region_pts_;  // one region's points for refinement
-  std::vector<RidgeFit> fits_;
-  Image<float> scratch_depth_;
+  std::vector<PipeEstimate> slot_;           // per candidate: its estimate, if accepted
+  std::vector<char> slot_filled_;
   LocateOutput out_;
   int ridge_capacity_ = 0;
 };

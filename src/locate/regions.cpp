@@ -16,6 +16,7 @@ void reserve_regions(RegionBuffers* rb, const ZBuffer& zb, const LocateConfig& c
   const std::size_t cells = zb.z.pixels.size();
   rb->core_label.resize(zb.z.width, zb.z.height, -1);
   rb->stamp.resize(zb.z.width, zb.z.height, 0);
+  rb->ridge_z.resize(zb.z.width, zb.z.height, 0.0f);
   rb->queue.assign(cells, 0);
   rb->core_cells.assign(cells, 0);
   // A pipe's visible region is at most about L x D; allow three times that before calling it a leak.
@@ -54,6 +55,7 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
   const float up_min = float(std::cos(cfg.upward_normal_max_deg * kDeg));
   const float cont_min = float(std::cos(cfg.continuity_max_deg * kDeg));
   const float step_max = float(cfg.continuity_step_max_mm);
+  const float drop_max = float(cfg.region_max_drop_of_d) * d;
   const float cell_area = float(zb.pixel_mm * zb.pixel_mm);
   const float area_min = float(cfg.core_min_area_of_d2) * d * d;
   const float core_extent_max = float(cfg.core_max_extent_of_l) * l;
@@ -113,10 +115,13 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
     for (int k = cores[c].begin; k < cores[c].end && count < rb->max_region_cells; ++k) {
       cells[count++] = rb->core_cells[k];
       rb->stamp.pixels[rb->core_cells[k]] = stamp;
+      rb->ridge_z.pixels[rb->core_cells[k]] = zb.z.pixels[rb->core_cells[k]];
       centroid += zb.point(rb->core_cells[k] % w, rb->core_cells[k] / w);
     }
     centroid /= float(cores[c].end - cores[c].begin);
     bool leaked = false;
+    const int core_count = cores[c].end - cores[c].begin;
+    int ring_cells = 0, ring_lower = 0;
     for (int head = 0; head < count; ++head) {
       const int ci = cells[head] % w, cj = cells[head] / w;
       const Eigen::Vector3f& ni_n = nm.n.at(ci, cj);
@@ -129,23 +134,25 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
         const Eigen::Vector3f& nn = nm.n.at(ni, nj);
         if (nn.z() == 0 && nn.x() == 0) continue;  // no normal
         if (nn.dot(ni_n) <= cont_min || std::abs(zb.z.at(ni, nj) - zi) > step_max) continue;
+        // The visible part of a pipe lies within about one diameter below its top: growth does
+        // not follow a smoothed edge down onto the floor or the pipe beneath.
+        const float top = rb->ridge_z.at(ci, cj);
+        if (zb.z.at(ni, nj) < top - drop_max) continue;
+        rb->ridge_z.at(ni, nj) = top;
         if (count >= rb->max_region_cells) {
           leaked = true;
           break;
         }
         s = stamp;
         cells[count++] = zb.index(ni, nj);
+        // Convex: beside the core the surface tilts away from it (plane-fit normals, not noisy heights).
+        if (head < core_count) ++ring_cells, ring_lower += nn.x() * float(kDi[k]) + nn.y() * float(kDj[k]) > 0;
       }
       if (leaked) break;
     }
     if (leaked) continue;  // spread over far more than one pipe: not a pipe lying on others
-    // A pipe's top is convex: the cells grown around its core lie lower than the core. A patch of
-    // floor between pipes grows up their sides instead.
-    const int core_count = cores[c].end - cores[c].begin;
-    double core_z = 0, side_z = 0;
-    for (int k = 0; k < count; ++k) (k < core_count ? core_z : side_z) += zb.z.pixels[std::size_t(cells[k])];
-    if (count - core_count < core_count / 2) continue;
-    if (side_z / (count - core_count) > core_z / core_count - cfg.convexity_min_of_d * d) continue;
+    // A pipe's top is convex: the cells grown straight from its core tilt away from it. A patch of floor between pipes grows up their sides instead.
+    if (ring_cells == 0 || float(ring_lower) < float(cfg.convexity_min_share) * float(ring_cells)) continue;
     // 3. Keep regions longer than a * L.
     const float extent = longest_distance(zb, cells, count);
     if (extent <= float(cfg.region_min_extent_of_l) * l) continue;

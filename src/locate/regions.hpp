@@ -22,6 +22,7 @@ struct RegionBuffers {
   Image<int> core_label;          // -1 none, else core index (this frame)
   Image<int> stamp;               // growth visit marks
   int stamp_value = 0;
+  Image<float> ridge_z;           // growth: height of the core cell each grown cell came from
   std::vector<int> queue;         // BFS
   std::vector<int> core_cells;    // all kept cores' cells
   std::vector<int> region_cells;  // all grown regions' cells

@@ -12,6 +12,10 @@ Verification verify_pose(const Mesh& mesh, const Pose& model_to_cam, const Image
     for (int x = box.x0; x <= box.x1; ++x) {
       const float zm = scratch->at(x, y);
       if (zm <= 0) continue;
+      // The silhouette's rim is left out: lateral noise mixes it with the background.
+      if (x == box.x0 || y == box.y0 || x == box.x1 || y == box.y1 || scratch->at(x - 1, y) <= 0 ||
+          scratch->at(x + 1, y) <= 0 || scratch->at(x, y - 1) <= 0 || scratch->at(x, y + 1) <= 0)
+        continue;
       ++v.model_px;
       const float zo = depth.at(x, y);
       if (!(zo > 0)) continue;  // no reading: neither for nor against

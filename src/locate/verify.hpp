@@ -10,7 +10,7 @@
 namespace pipeloc {
 
 struct Verification {
-  int model_px = 0;      // pixels the model covers in the image
+  int model_px = 0;      // pixels the model covers in the image, less its one-pixel rim
   int agree_px = 0;      // measured depth within tolerance of the model
   int free_space_px = 0; // measured farther: the sensor saw through where the model would be
   int occluded_px = 0;   // measured nearer: something lies in front (another pipe, or the pose sank in)

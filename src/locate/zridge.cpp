@@ -13,7 +13,7 @@ void reserve_ridge(RidgeBuffers* rb, float max_extent_mm, float cell_mm) {
 }
 
 int extract_zridge(const Eigen::Vector3f* pts, int count, const Eigen::Vector2f& axis, float cell, float min_run_mm,
-                   RidgeBuffers* rb, Eigen::Vector3f* out, int capacity) {
+                   RidgeBuffers* rb, Eigen::Vector3f* out, int capacity, bool whole_surface) {
   if (count == 0) return 0;
   const Eigen::Vector2f across(-axis.y(), axis.x());
   float u0 = 1e30f, u1 = -1e30f, v0 = 1e30f, v1 = -1e30f;
@@ -33,8 +33,13 @@ int extract_zridge(const Eigen::Vector3f* pts, int count, const Eigen::Vector2f&
     float& z = rb->top_z[std::size_t(r) * cols + c];
     if (pts[k].z() > z) z = pts[k].z(), rb->top_p[std::size_t(r) * cols + c] = pts[k];
   }
-  const int min_run = std::max(1, int(min_run_mm / cell));
   int n = 0;
+  if (whole_surface) {
+    for (std::size_t k = 0; k < std::size_t(rows) * cols && n < capacity; ++k)
+      if (rb->top_z[k] != kNone) out[n++] = rb->top_p[k];
+    return n;
+  }
+  const int min_run = std::max(1, int(min_run_mm / cell));
   for (int r = 0; r < rows && n < capacity; ++r) {
     const float* zr = &rb->top_z[std::size_t(r) * cols];
     int c = 0;

@@ -18,7 +18,10 @@ void reserve_ridge(RidgeBuffers* rb, float max_extent_mm, float cell_mm);
 
 // points: bin frame. axis: unit in XY. Writes at most `capacity` ridge points to out and
 // returns their count. Runs narrower than min_run_mm are ignored (noise, pipe ends).
+// With `whole_surface`, every occupied cell's highest point instead: the visible surface sampled
+// on the same grid (the paper's comparison, "--match surface").
 int extract_zridge(const Eigen::Vector3f* points, int count, const Eigen::Vector2f& axis, float cell_mm,
-                   float min_run_mm, RidgeBuffers* rb, Eigen::Vector3f* out, int capacity);
+                   float min_run_mm, RidgeBuffers* rb, Eigen::Vector3f* out, int capacity,
+                   bool whole_surface = false);
 
 }  // namespace pipeloc
