@@ -17,11 +17,11 @@
 namespace pipeloc::app {
 namespace {
 
-LocateConfig config_or_default(const std::string& path) {
-  if (path.empty()) return LocateConfig{};
+AppConfig config_or_default(const std::string& path) {
+  if (path.empty()) return AppConfig{};
   const AppConfig cfg = load_config(path);
   for (const auto& line : describe_config(cfg)) spdlog::info("config: {}", line);
-  return cfg.locate;
+  return cfg;
 }
 
 Json estimate_json(const PipeEstimate& e, int rank, bool pick) {
@@ -54,11 +54,14 @@ void add_locate(CLI::App& app) {
   cmd->add_option("--depth", opt->depth, "16-bit depth PNG")->required();
   cmd->add_option("--camera", opt->camera, "scene_camera.json (BOP) holding this image's camera")->required();
   cmd->add_option("--im-id", opt->im_id, "image id in the camera file (default: the file's only or first entry)");
-  cmd->add_option("--model", opt->model, "pipe STL (mm)")->required();
+  cmd->add_option("--model", opt->model, "pipe STL (mm); default: [model] stl of the config");
   cmd->add_option("--overlay", opt->overlay, "write the overlay PNG here");
   cmd->add_option("--config", opt->config, "TOML config ([locate] thresholds)");
   cmd->callback([opt] {
-    const LocateConfig cfg = config_or_default(opt->config);
+    const AppConfig app_cfg = config_or_default(opt->config);
+    const LocateConfig& cfg = app_cfg.locate;
+    const std::string model_file = opt->model.empty() ? app_cfg.model_path : opt->model;
+    if (model_file.empty()) throw ModelError("locate: no model: give --model or [model] stl in the config");
     const auto cameras = read_scene_camera(opt->camera);
     if (cameras.empty()) throw IoError("'" + opt->camera + "': holds no camera");
     const auto it = opt->im_id < 0 ? cameras.begin() : cameras.find(opt->im_id);
@@ -68,7 +71,7 @@ void add_locate(CLI::App& app) {
     CameraInfo sized = cam;
     sized.intrinsics.width = depth.width;
     sized.intrinsics.height = depth.height;
-    const PipeModel model = load_pipe_model(opt->model);
+    const PipeModel model = load_pipe_model(model_file);
     Locator locator(model, cfg, sized.intrinsics);
     const LocateOutput& out = locator.locate(depth, sized);
     const int pick = out.pick();
@@ -107,7 +110,7 @@ void add_eval_bop(CLI::App& app) {
       ->check(CLI::IsMember({"zridge", "surface"}));
   cmd->add_option("--overlays", opt->overlays, "also write an overlay PNG per image into this directory");
   cmd->callback([opt] {
-    LocateConfig cfg = config_or_default(opt->config);
+    LocateConfig cfg = config_or_default(opt->config).locate;
     cfg.match_surface = opt->match == "surface";
     const auto targets = read_targets(opt->dataset + "/test_targets_bop19.json");
     std::map<int, std::unique_ptr<PipeModel>> models;
