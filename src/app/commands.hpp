@@ -11,6 +11,7 @@ void add_simulate(CLI::App& app);
 void add_score(CLI::App& app);
 void add_locate(CLI::App& app);
 void add_eval_bop(CLI::App& app);
+void add_bench(CLI::App& app);
 
 // Exit status a callback asks for (0 unless set).
 int& exit_status();

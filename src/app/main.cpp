@@ -20,6 +20,7 @@ int main(int argc, char** argv) {
   pipeloc::app::add_score(app);
   pipeloc::app::add_locate(app);
   pipeloc::app::add_eval_bop(app);
+  pipeloc::app::add_bench(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
