@@ -1,0 +1,34 @@
+#include "plc/register_map.hpp"
+
+#include <cmath>
+
+namespace pipeloc::reg {
+namespace {
+
+void put(double value, double scale, const Encoding& enc, std::uint16_t* at) {
+  if (enc.scaled_int32)
+    encode_scaled(value, scale, enc.order, at);
+  else
+    encode_float(float(value), enc.order, at);
+}
+
+}  // namespace
+
+void write_result_block(const Result& r, const Encoding& enc, std::uint16_t* map) {
+  map[kError] = std::uint16_t(r.error);
+  map[kCount] = r.count;
+  map[kIndex] = r.index;
+  map[kCycleMs] = r.cycle_ms;
+  map[kFrameAgeMs] = r.frame_age_ms;
+  encode_u32(r.cycles, enc.order, &map[kCycles]);
+  const bool valid = r.status == Status::done_ok && r.pose.has_value();
+  const double nan = std::nan("");
+  for (int i = 0; i < 3; ++i) {
+    put(valid ? r.pose->xyz_mm[std::size_t(i)] : nan, 100.0, enc, &map[kPose + 2 * i]);
+    put(valid ? r.pose->rxyz_deg[std::size_t(i)] : nan, 1000.0, enc, &map[kPose + 6 + 2 * i]);
+  }
+  put(valid ? r.score : nan, 10000.0, enc, &map[kScore]);
+  for (int i = 0; i < 4; ++i) put(valid ? r.pose->wxyz[std::size_t(i)] : nan, 10000.0, enc, &map[kQuat + 2 * i]);
+}
+
+}  // namespace pipeloc::reg

@@ -1,0 +1,46 @@
+// The register map of DESIGN.md (home for PLC programmers: firmware-host/REGISTERS.md once the
+// server lands). Offsets are from a configurable base; 32-bit values take two registers.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+
+#include "plc/encoding.hpp"
+#include "plc/robot_pose.hpp"
+
+namespace pipeloc::reg {
+
+constexpr int kCmd = 0, kReqId = 1;                       // written by the PLC
+constexpr int kStatus = 10, kAckId = 11, kError = 12, kHeartbeat = 13, kCount = 14, kIndex = 15,
+              kCycleMs = 16, kFrameAgeMs = 17, kCycles = 18;  // u32 at 18-19
+constexpr int kPose = 20;                                  // X Y Z RX RY RZ, 2 registers each
+constexpr int kScore = 32, kQuat = 34;                     // QW QX QY QZ
+constexpr int kSize = 42;
+
+enum class Command : std::uint16_t { locate = 1, next = 2, clear_error = 3 };
+enum class Status : std::uint16_t { ready = 0, busy = 1, done_ok = 2, done_none = 3, error = 4 };
+enum class Error : std::uint16_t {
+  none = 0, sensor_unavailable = 1, frame_invalid = 2, budget_exhausted = 3, config_model = 4, bad_command = 5,
+  no_further_result = 6
+};
+
+struct Encoding {
+  WordOrder order = WordOrder::abcd;
+  bool scaled_int32 = false;  // 0.01 mm, 0.001 deg, score x 10000, quaternion x 10000
+};
+
+struct Result {
+  Status status = Status::ready;
+  Error error = Error::none;
+  std::uint16_t count = 0, index = 0, cycle_ms = 0, frame_age_ms = 0;
+  std::uint32_t cycles = 0;
+  std::optional<RobotPose> pose;  // only read when status is done_ok
+  float score = 0;
+};
+
+// Writes ERROR .. QZ (12..41) of `map` (kSize registers from the base). STATUS and ACK_ID are
+// left to the handshake, which writes them last. Unless the status is DONE_OK the pose, score
+// and quaternion hold NaN (or the int32 sentinel), so a stale pose can never be read as new.
+void write_result_block(const Result& result, const Encoding& enc, std::uint16_t* map);
+
+}  // namespace pipeloc::reg

@@ -1,0 +1,124 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "plc/register_map.hpp"
+
+namespace pipeloc {
+namespace {
+
+TEST(Encoding, FloatInEveryWordOrder) {
+  std::uint16_t r[2];
+  // DESIGN.md's reference value: 123456.0f is 0x47F12000.
+  encode_float(123456.0f, WordOrder::abcd, r);
+  EXPECT_EQ(r[0], 0x47F1);
+  EXPECT_EQ(r[1], 0x2000);
+  encode_float(123456.0f, WordOrder::cdab, r);
+  EXPECT_EQ(r[0], 0x2000);
+  EXPECT_EQ(r[1], 0x47F1);
+  encode_float(123456.0f, WordOrder::badc, r);
+  EXPECT_EQ(r[0], 0xF147);
+  EXPECT_EQ(r[1], 0x0020);
+  encode_float(123456.0f, WordOrder::dcba, r);
+  EXPECT_EQ(r[0], 0x0020);
+  EXPECT_EQ(r[1], 0xF147);
+  for (WordOrder o : {WordOrder::abcd, WordOrder::cdab, WordOrder::badc, WordOrder::dcba}) {
+    for (float v : {0.0f, -1.5f, 123456.0f, 3.14159f, -987.25f}) {
+      encode_float(v, o, r);
+      EXPECT_EQ(decode_float(r, o), v) << word_order_name(o);
+    }
+    EXPECT_EQ(parse_word_order(word_order_name(o)), o);
+  }
+  EXPECT_THROW(parse_word_order("abcd!"), std::invalid_argument);
+}
+
+TEST(Encoding, ScaledInt32SaturatesAndKeepsTheSentinelForNoValue) {
+  std::uint16_t r[2];
+  encode_scaled(-123.456, 100.0, WordOrder::abcd, r);  // 0.01 mm
+  EXPECT_EQ(std::int32_t(decode_u32(r, WordOrder::abcd)), -12346);
+  EXPECT_DOUBLE_EQ(decode_scaled(r, 100.0, WordOrder::abcd), -123.46);
+  encode_scaled(std::nan(""), 100.0, WordOrder::cdab, r);
+  EXPECT_EQ(std::int32_t(decode_u32(r, WordOrder::cdab)), kScaledNone);
+  EXPECT_TRUE(std::isnan(decode_scaled(r, 100.0, WordOrder::cdab)));
+  encode_scaled(-1e12, 100.0, WordOrder::abcd, r);
+  EXPECT_EQ(std::int32_t(decode_u32(r, WordOrder::abcd)), kScaledNone + 1);
+  encode_scaled(1e12, 100.0, WordOrder::abcd, r);
+  EXPECT_EQ(std::int32_t(decode_u32(r, WordOrder::abcd)), INT32_MAX);
+}
+
+TEST(Euler, KnownRotations) {
+  const Eigen::Matrix3d rz90 = Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  auto e = euler_deg(rz90, EulerConvention::zyx);
+  EXPECT_NEAR(e[0], 0, 1e-9);
+  EXPECT_NEAR(e[1], 0, 1e-9);
+  EXPECT_NEAR(e[2], 90, 1e-9);
+  // KUKA A=30 B=20 C=10 is Rz(30) Ry(20) Rx(10).
+  const Eigen::Matrix3d kuka = (Eigen::AngleAxisd(30 * M_PI / 180, Eigen::Vector3d::UnitZ()) *
+                                Eigen::AngleAxisd(20 * M_PI / 180, Eigen::Vector3d::UnitY()) *
+                                Eigen::AngleAxisd(10 * M_PI / 180, Eigen::Vector3d::UnitX()))
+                                   .toRotationMatrix();
+  e = euler_deg(kuka, EulerConvention::zyx);
+  EXPECT_NEAR(e[0], 10, 1e-9);
+  EXPECT_NEAR(e[1], 20, 1e-9);
+  EXPECT_NEAR(e[2], 30, 1e-9);
+  // The same matrix in XYZ intrinsic angles is something else, and composes back to it.
+  e = euler_deg(kuka, EulerConvention::xyz);
+  EXPECT_TRUE(rotation_from_euler_deg(e, EulerConvention::xyz).isApprox(kuka, 1e-9));
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-170, 170), v(-85, 85);
+  for (int i = 0; i < 200; ++i)
+    for (EulerConvention c : {EulerConvention::zyx, EulerConvention::xyz}) {
+      const std::array<double, 3> in{u(rng), v(rng), u(rng)};
+      const Eigen::Matrix3d r = rotation_from_euler_deg(in, c);
+      EXPECT_TRUE(rotation_from_euler_deg(euler_deg(r, c), c).isApprox(r, 1e-9));
+    }
+  // Gimbal lock still composes back.
+  const Eigen::Matrix3d lock = rotation_from_euler_deg({15, 90, 40}, EulerConvention::zyx);
+  EXPECT_TRUE(rotation_from_euler_deg(euler_deg(lock, EulerConvention::zyx), EulerConvention::zyx).isApprox(lock, 1e-6));
+}
+
+TEST(RobotPose, HandEyeAndGraspOffsetAndQuaternion) {
+  Pose model_to_cam = Pose::Identity();
+  model_to_cam.translation() = Eigen::Vector3d(10, 20, 1000);
+  Pose robot_from_cam = Pose::Identity();
+  robot_from_cam.linear() = Eigen::Vector3d(1, -1, -1).asDiagonal();  // camera looking down
+  robot_from_cam.translation() = Eigen::Vector3d(500, 0, 1200);
+  Pose grasp = Pose::Identity();
+  grasp.translation() = Eigen::Vector3d(0, 0, 5);
+  const RobotPose p = to_robot(model_to_cam, robot_from_cam, grasp, EulerConvention::zyx);
+  EXPECT_NEAR(p.xyz_mm[0], 510, 1e-9);
+  EXPECT_NEAR(p.xyz_mm[1], -20, 1e-9);
+  EXPECT_NEAR(p.xyz_mm[2], 1200 - 1005, 1e-9);
+  EXPECT_NEAR(std::abs(p.rxyz_deg[0]), 180, 1e-9);  // half a turn about x
+  EXPECT_GE(p.wxyz[0], 0);
+  EXPECT_NEAR(std::abs(p.wxyz[1]), 1, 1e-9);
+}
+
+TEST(RegisterMap, PoseIsNaNUnlessDoneOk) {
+  reg::Result r;
+  r.status = reg::Status::done_ok;
+  r.pose = RobotPose{{1, 2, 3}, {4, 5, 6}, {1, 0, 0, 0}};
+  r.score = 0.75f;
+  r.cycles = 70000;
+  std::uint16_t map[reg::kSize] = {};
+  reg::Encoding enc;
+  reg::write_result_block(r, enc, map);
+  EXPECT_FLOAT_EQ(decode_float(&map[reg::kPose + 4], enc.order), 3.0f);
+  EXPECT_FLOAT_EQ(decode_float(&map[reg::kScore], enc.order), 0.75f);
+  EXPECT_EQ(decode_u32(&map[reg::kCycles], enc.order), 70000u);
+  r.status = reg::Status::done_none;  // a pose left in the struct must not reach the registers
+  reg::write_result_block(r, enc, map);
+  for (int i = reg::kPose; i < reg::kSize; i += 2) EXPECT_TRUE(std::isnan(decode_float(&map[i], enc.order))) << i;
+  enc.scaled_int32 = true;
+  reg::write_result_block(r, enc, map);
+  for (int i = reg::kPose; i < reg::kSize; i += 2) EXPECT_EQ(std::int32_t(decode_u32(&map[i], enc.order)), kScaledNone);
+  r.status = reg::Status::done_ok;
+  reg::write_result_block(r, enc, map);
+  EXPECT_EQ(std::int32_t(decode_u32(&map[reg::kPose], enc.order)), 100);       // 1 mm in 0.01 mm
+  EXPECT_EQ(std::int32_t(decode_u32(&map[reg::kPose + 6], enc.order)), 4000);  // 4 deg in 0.001 deg
+  EXPECT_EQ(std::int32_t(decode_u32(&map[reg::kScore], enc.order)), 7500);
+}
+
+}  // namespace
+}  // namespace pipeloc
