@@ -39,7 +39,8 @@ TEST(DepthPng, RoundTripWithScale) {
 
 TEST(DepthPng, BadFilesAreNamed) {
   TempDir dir;
-  EXPECT_NE(error_of([&] { read_depth_png(dir.file("missing.png")); }).find("cannot open"), std::string::npos);
+  EXPECT_NE(error_of([&] { read_depth_png(dir.file("missing.png")); }).find("cannot open"),
+            std::string::npos);
   test::write_text(dir.file("text.png"), "this is not a png at all");
   EXPECT_NE(error_of([&] { read_depth_png(dir.file("text.png")); }).find("not a PNG"), std::string::npos);
   Image<Rgb> rgb(4, 4);
@@ -83,8 +84,9 @@ TEST(SceneCamera, BadFilesNameTheField) {
   check(R"({"0": {"depth_scale": 1}})", "cam_K");
   check(R"({"0": {"cam_K": [1, 2, 3], "depth_scale": 1}})", "expected 9 numbers");
   check(R"({"0": {"cam_K": [570, 0, 320, 0, 570, 240, 0, 0, 1], "depth_scale": -1}})", "depth_scale");
-  check(R"({"0": {"cam_K": [570, 0, 320, 0, 570, 240, 0, 0, 1], "depth_scale": 1, "cam_R_w2c": [1,0,0,0,1,0,0,0,1]}})",
-        "come together");
+  check(
+      R"({"0": {"cam_K": [570, 0, 320, 0, 570, 240, 0, 0, 1], "depth_scale": 1, "cam_R_w2c": [1,0,0,0,1,0,0,0,1]}})",
+      "come together");
   check(R"({"x": {"cam_K": [570, 0, 320, 0, 570, 240, 0, 0, 1], "depth_scale": 1}})", "not an image id");
   check(R"([1, 2])", "expected a JSON object");
 }
@@ -99,14 +101,15 @@ TEST(ResultsCsv, WritesAndReadsAndCountsMalformedRows) {
     row.im_id = 5;
     row.obj_id = 1;
     row.score = 0.75;
-    row.model_to_cam.linear() = Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+    row.model_to_cam.linear() =
+        Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
     row.model_to_cam.translation() = Eigen::Vector3d(10, -20, 1000);
     row.time_s = 0.031;
     write_result_row(out, row);
-    out << "1,2,3\n";                                   // too few fields
-    out << "1,2,3,0.5,1 0 0 0 1 0 0 0 1,1 2,0.1\n";     // t has 2 values
-    out << "1,2,3,abc,1 0 0 0 1 0 0 0 1,1 2 3,0.1\n";   // score not a number
-    out << "1,2,3,0.5,2 0 0 0 1 0 0 0 1,1 2 3,0.1\n";   // not a rotation
+    out << "1,2,3\n";                                  // too few fields
+    out << "1,2,3,0.5,1 0 0 0 1 0 0 0 1,1 2,0.1\n";    // t has 2 values
+    out << "1,2,3,abc,1 0 0 0 1 0 0 0 1,1 2 3,0.1\n";  // score not a number
+    out << "1,2,3,0.5,2 0 0 0 1 0 0 0 1,1 2 3,0.1\n";  // not a rotation
   }
   const ResultsFile file = read_results_csv(dir.file("r.csv"));
   ASSERT_EQ(file.rows.size(), 1u);

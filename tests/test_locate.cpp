@@ -3,7 +3,6 @@
 #include <cmath>
 
 #include "config/config_file.hpp"
-#include "render/raster.hpp"
 #include "locate/locator.hpp"
 #include "model/make_pipe.hpp"
 #include "score/mssd.hpp"
@@ -16,7 +15,8 @@ namespace {
 const PipeModel& preset_model(const std::string& name) {
   static std::map<std::string, PipeModel> models;
   auto it = models.find(name);
-  if (it == models.end()) it = models.emplace(name, derive_pipe_model(make_pipe(pipe_preset(name)), name)).first;
+  if (it == models.end())
+    it = models.emplace(name, derive_pipe_model(make_pipe(pipe_preset(name)), name)).first;
   return it->second;
 }
 
@@ -39,7 +39,8 @@ ZBuffer synthetic_zbuffer(int size, F f) {
 
 TEST(Normals, PlaneHasItsNormalEverywhere) {
   const Eigen::Vector3d n = Eigen::Vector3d(0.2, -0.3, 1).normalized();
-  ZBuffer zb = synthetic_zbuffer(60, [&](double x, double y) { return float(100 - (n.x() * x + n.y() * y) / n.z()); });
+  ZBuffer zb =
+      synthetic_zbuffer(60, [&](double x, double y) { return float(100 - (n.x() * x + n.y() * y) / n.z()); });
   zb.z.at(30, 30) = ZBuffer::kEmpty;  // a hole does not disturb its neighbours
   NormalMap nm;
   reserve_normals(&nm, zb);
@@ -81,35 +82,6 @@ OnePipe one_pipe(const std::string& preset, unsigned seed) {
 }
 
 // III on the noisy frame against III on the ideal top view of the pipe at its true pose.
-Eigen::Vector2f ideal_axis(const PipeModel& model, const Pose& model_to_bin, const LocateConfig& cfg) {
-  HeightMap hm;
-  hm.cell_mm = cfg.zbuffer_pixel_mm;
-  Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e30), hi = -lo;
-  for (const auto& v : model.mesh.vertices) {
-    const Eigen::Vector3d p = model_to_bin * v.cast<double>();
-    lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
-  }
-  hm.origin_x_mm = lo.x() - 2;
-  hm.origin_y_mm = lo.y() - 2;
-  const int w = int(hi.x() - lo.x()) + 5, h = int(hi.y() - lo.y()) + 5;
-  hm.z_mm.resize(w, h, -1e30f);
-  render_height(model.mesh, model_to_bin, Envelope::top, &hm);
-  ZBuffer zb;
-  zb.origin_x_mm = hm.origin_x_mm;
-  zb.origin_y_mm = hm.origin_y_mm;
-  zb.width = w;
-  zb.height = h;
-  zb.z.resize(w, h, ZBuffer::kEmpty);
-  std::vector<int> cells;
-  Eigen::Vector3f c = Eigen::Vector3f::Zero();
-  for (int j = 0; j < h; ++j)
-    for (int i = 0; i < w; ++i)
-      if (hm.z_mm.at(i, j) > -1e29f) zb.z.at(i, j) = hm.z_mm.at(i, j), cells.push_back(zb.index(i, j)), c += zb.point(i, j);
-  AxisBuffers buf;
-  buf.keys.resize(cells.size());
-  return estimate_axis(zb, cells.data(), int(cells.size()), c / float(cells.size()), cfg, model.tube_diameter_mm, &buf).axis;
-}
-
 // Measured for the S-bend, where the cross-section count has one clear peak. For the U and the
 // torus-like pipe the count is flat over tens of degrees even on ideal data (their median
 // disagreement is 15 degrees, see the closing note of issue 3); the initial states absorb that
@@ -122,7 +94,7 @@ TEST(PrincipalAxis, WithinFiveDegreesOfTheIdealForTheSBend) {
       Locator loc(preset_model(name), s.cfg, s.scene.camera.intrinsics);
       const LocateOutput& out = loc.locate(s.scene.depth_mm, s.scene.camera);
       if (out.traces.empty()) continue;
-      const Eigen::Vector2f truth = ideal_axis(preset_model(name), s.scene.model_to_world[0], s.cfg);
+      const Eigen::Vector2f truth = top_view_axis(preset_model(name), s.scene.model_to_world[0], s.cfg).axis;
       errors.push_back(std::acos(std::min(1.0f, std::abs(truth.dot(out.traces[0].axis.axis)))) * 180 / M_PI);
     }
     // A lone pipe is found in most frames, and its direction agrees with the ideal one.
@@ -164,7 +136,8 @@ TEST(RidgeIcp, ConvergesFromThePapersRanges) {
       start.translation() = c + turn * (truth.translation() - c) + axis * shift;
       const RidgeFit fit = ridge_icp(loc.locator_model(), start, ridge, t.ridge_count, t.axis.axis, s.cfg,
                                      s.cfg.icp_max_iterations * 2, &buf);
-      const RefineResult ref = refine_on_surface(loc.locator_model(), fit.pose, region.data(), int(region.size()), s.cfg);
+      const RefineResult ref =
+          refine_on_surface(loc.locator_model(), fit.pose, region.data(), int(region.size()), s.cfg);
       EXPECT_LT(pose_error(model, ref.pose, truth), 5.0) << deg << " deg, " << shift << " mm";
     }
   }
@@ -189,7 +162,8 @@ TEST(Segmentation, CandidateCoresLieOnTopPipes) {
     std::vector<int> votes(s.model_to_world.size(), 0);
     for (int k = cand.core_begin; k < cand.core_end; ++k) {
       const int cell = rb.core_cells[std::size_t(k)];
-      const Eigen::Vector3d pt = loc.zbuffer().point(cell % loc.zbuffer().z.width, cell / loc.zbuffer().z.width).cast<double>();
+      const Eigen::Vector3d pt =
+          loc.zbuffer().point(cell % loc.zbuffer().z.width, cell / loc.zbuffer().z.width).cast<double>();
       for (std::size_t g = 0; g < votes.size(); ++g) {
         const Eigen::Vector3f q = (s.model_to_world[g].inverse() * pt).cast<float>();
         const int smp = lm.nearest_sample(q);

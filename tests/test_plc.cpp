@@ -75,7 +75,8 @@ TEST(Euler, KnownRotations) {
     }
   // Gimbal lock still composes back.
   const Eigen::Matrix3d lock = rotation_from_euler_deg({15, 90, 40}, EulerConvention::zyx);
-  EXPECT_TRUE(rotation_from_euler_deg(euler_deg(lock, EulerConvention::zyx), EulerConvention::zyx).isApprox(lock, 1e-6));
+  EXPECT_TRUE(rotation_from_euler_deg(euler_deg(lock, EulerConvention::zyx), EulerConvention::zyx)
+                  .isApprox(lock, 1e-6));
 }
 
 TEST(RobotPose, HandEyeAndGraspOffsetAndQuaternion) {
@@ -109,10 +110,12 @@ TEST(RegisterMap, PoseIsNaNUnlessDoneOk) {
   EXPECT_EQ(decode_u32(&map[reg::kCycles], enc.order), 70000u);
   r.status = reg::Status::done_none;  // a pose left in the struct must not reach the registers
   reg::write_result_block(r, enc, map);
-  for (int i = reg::kPose; i < reg::kSize; i += 2) EXPECT_TRUE(std::isnan(decode_float(&map[i], enc.order))) << i;
+  for (int i = reg::kPose; i < reg::kSize; i += 2)
+    EXPECT_TRUE(std::isnan(decode_float(&map[i], enc.order))) << i;
   enc.scaled_int32 = true;
   reg::write_result_block(r, enc, map);
-  for (int i = reg::kPose; i < reg::kSize; i += 2) EXPECT_EQ(std::int32_t(decode_u32(&map[i], enc.order)), kScaledNone);
+  for (int i = reg::kPose; i < reg::kSize; i += 2)
+    EXPECT_EQ(std::int32_t(decode_u32(&map[i], enc.order)), kScaledNone);
   r.status = reg::Status::done_ok;
   reg::write_result_block(r, enc, map);
   EXPECT_EQ(std::int32_t(decode_u32(&map[reg::kPose], enc.order)), 100);       // 1 mm in 0.01 mm

@@ -50,11 +50,13 @@ TEST(Simulator, NoisyDepthAgreesWithTruthWithinNoiseModel) {
       ++valid;
       float lo = 1e9f, hi = 0;
       for (int dy = -2; dy <= 2; ++dy)
-        for (int dx = -2; dx <= 2; ++dx) lo = std::min(lo, clean.at(x + dx, y + dy)), hi = std::max(hi, clean.at(x + dx, y + dy));
+        for (int dx = -2; dx <= 2; ++dx)
+          lo = std::min(lo, clean.at(x + dx, y + dy)), hi = std::max(hi, clean.at(x + dx, y + dy));
       if (lo <= 0 || hi - lo > 3) continue;  // edges: lateral noise may pick the neighbour
       ++checked;
-      const double bound = 5 * params.sensor.axial_sigma_mm(clean.at(x, y)) * 2 +  // grazing doubles sigma at most here
-                           params.sensor.depth_step_mm(clean.at(x, y), params.intrinsics.fx) + (hi - lo);
+      const double bound =
+          5 * params.sensor.axial_sigma_mm(clean.at(x, y)) * 2 +  // grazing doubles sigma at most here
+          params.sensor.depth_step_mm(clean.at(x, y), params.intrinsics.fx) + (hi - lo);
       outside += std::abs(z - clean.at(x, y)) > bound;
     }
   }
@@ -66,7 +68,8 @@ TEST(Simulator, NoisyDepthAgreesWithTruthWithinNoiseModel) {
 }
 
 // Möller–Trumbore, for the brute-force recount.
-double ray_hit(const Eigen::Vector3d& d, const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
+double ray_hit(const Eigen::Vector3d& d, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+               const Eigen::Vector3d& c) {
   const Eigen::Vector3d e1 = b - a, e2 = c - a, p = d.cross(e2);
   const double det = e1.dot(p);
   if (std::abs(det) < 1e-12) return -1;
@@ -95,7 +98,8 @@ TEST(Simulator, VisibilityMatchesBruteForceRayCast) {
   std::vector<int> all(n, 0), visib(n, 0);
   for (int y = 0; y < params.intrinsics.height; ++y) {
     for (int x = 0; x < params.intrinsics.width; ++x) {
-      const Eigen::Vector3d ray((x - params.intrinsics.cx) / params.intrinsics.fx, (y - params.intrinsics.cy) / params.intrinsics.fy, 1);
+      const Eigen::Vector3d ray((x - params.intrinsics.cx) / params.intrinsics.fx,
+                                (y - params.intrinsics.cy) / params.intrinsics.fy, 1);
       double nearest = 1e18;
       int front = -1;
       for (int i = 0; i < n; ++i) {
@@ -117,7 +121,8 @@ TEST(Simulator, VisibilityMatchesBruteForceRayCast) {
     EXPECT_NEAR(s.info[i].px_count_visib, visib[i], tol) << "pipe " << i;
     const double occ = all[i] ? 1.0 - double(visib[i]) / all[i] : 1.0;
     EXPECT_NEAR(s.info[i].occ_by_pipes, occ, 0.05) << "pipe " << i;
-    EXPECT_EQ(s.info[i].top, s.info[i].occ_by_pipes <= 0.05 && s.info[i].px_count_valid >= 0.4 * s.info[i].px_count_all);
+    EXPECT_EQ(s.info[i].top,
+              s.info[i].occ_by_pipes <= 0.05 && s.info[i].px_count_valid >= 0.4 * s.info[i].px_count_all);
   }
 }
 

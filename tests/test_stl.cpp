@@ -106,7 +106,8 @@ TEST(Stl, NotAnStl) {
 TEST(Stl, ZeroTriangleBinary) {
   TempDir dir;
   test::write_text(dir.file("z.stl"), std::string(84, '\0'));
-  EXPECT_NE(error_of(dir.file("z.stl")).find("no triangles"), std::string::npos) << error_of(dir.file("z.stl"));
+  EXPECT_NE(error_of(dir.file("z.stl")).find("no triangles"), std::string::npos)
+      << error_of(dir.file("z.stl"));
 }
 
 TEST(Centreline, ParsesAndRejects) {

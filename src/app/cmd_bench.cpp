@@ -53,26 +53,30 @@ void add_bench(CLI::App& app) {
     std::vector<SimulatedScene> scenes;
     for (int i = 0; i < distinct; ++i) scenes.push_back(simulate_scene(model, params, rng));
     Locator locator(model, cfg, params.intrinsics);
-    for (int i = 0; i < opt->warmup; ++i) locator.locate(scenes[std::size_t(i % distinct)].depth_mm, scenes[std::size_t(i % distinct)].camera);
-    std::vector<Series> series = {{"cycle", {}}, {"zbuffer", {}}, {"normals", {}}, {"regions", {}},
+    for (int i = 0; i < opt->warmup; ++i)
+      locator.locate(scenes[std::size_t(i % distinct)].depth_mm, scenes[std::size_t(i % distinct)].camera);
+    std::vector<Series> series = {{"cycle", {}}, {"zbuffer", {}},    {"normals", {}}, {"regions", {}},
                                   {"axis*", {}}, {"ridge_icp*", {}}, {"refine*", {}}, {"verify*", {}}};
     int found = 0;
     for (int i = 0; i < opt->frames; ++i) {
       const SimulatedScene& s = scenes[std::size_t((i + opt->warmup) % distinct)];
       const LocateOutput& out = locator.locate(s.depth_mm, s.camera);
       const StageTimes& t = out.times;
-      const double v[] = {t.total_ms, t.zbuffer_ms, t.normals_ms, t.regions_ms, t.axis_ms, t.ridge_icp_ms, t.refine_ms, t.verify_ms};
+      const double v[] = {t.total_ms, t.zbuffer_ms,   t.normals_ms, t.regions_ms,
+                          t.axis_ms,  t.ridge_icp_ms, t.refine_ms,  t.verify_ms};
       for (std::size_t k = 0; k < series.size(); ++k) series[k].ms.push_back(v[k]);
       found += int(out.estimates.size());
     }
-    std::printf("%-12s %10s %10s %10s   (%d frames of %d %s pipes, %d threads; * = summed over threads)\n", "stage",
-                "median_ms", "p95_ms", "max_ms", opt->frames, opt->pipes, opt->model.c_str(), cfg.threads);
+    std::printf("%-12s %10s %10s %10s   (%d frames of %d %s pipes, %d threads; * = summed over threads)\n",
+                "stage", "median_ms", "p95_ms", "max_ms", opt->frames, opt->pipes, opt->model.c_str(),
+                cfg.threads);
     for (const auto& s : series)
       std::printf("%-12s %10.1f %10.1f %10.1f\n", s.name, quantile(s.ms, 0.5), quantile(s.ms, 0.95),
                   *std::max_element(s.ms.begin(), s.ms.end()));
     rusage usage{};
     getrusage(RUSAGE_SELF, &usage);
-    std::printf("poses per frame %.1f, peak RSS %.1f MB\n", double(found) / opt->frames, usage.ru_maxrss / 1024.0);
+    std::printf("poses per frame %.1f, peak RSS %.1f MB\n", double(found) / opt->frames,
+                usage.ru_maxrss / 1024.0);
   });
 }
 

@@ -50,10 +50,12 @@ void add_locate(CLI::App& app) {
     int im_id = -1;
   };
   auto opt = std::make_shared<Options>();
-  auto* cmd = app.add_subcommand("locate", "Localize the top pipes in one depth image; one JSON line per pipe");
+  auto* cmd =
+      app.add_subcommand("locate", "Localize the top pipes in one depth image; one JSON line per pipe");
   cmd->add_option("--depth", opt->depth, "16-bit depth PNG")->required();
   cmd->add_option("--camera", opt->camera, "scene_camera.json (BOP) holding this image's camera")->required();
-  cmd->add_option("--im-id", opt->im_id, "image id in the camera file (default: the file's only or first entry)");
+  cmd->add_option("--im-id", opt->im_id,
+                  "image id in the camera file (default: the file's only or first entry)");
   cmd->add_option("--model", opt->model, "pipe STL (mm); default: [model] stl of the config");
   cmd->add_option("--overlay", opt->overlay, "write the overlay PNG here");
   cmd->add_option("--config", opt->config, "TOML config ([locate] thresholds)");
@@ -65,7 +67,8 @@ void add_locate(CLI::App& app) {
     const auto cameras = read_scene_camera(opt->camera);
     if (cameras.empty()) throw IoError("'" + opt->camera + "': holds no camera");
     const auto it = opt->im_id < 0 ? cameras.begin() : cameras.find(opt->im_id);
-    if (it == cameras.end()) throw IoError("'" + opt->camera + "': no entry for image " + std::to_string(opt->im_id));
+    if (it == cameras.end())
+      throw IoError("'" + opt->camera + "': no entry for image " + std::to_string(opt->im_id));
     const CameraInfo& cam = it->second;
     const Image<float> depth = read_depth_mm(opt->depth, cam.depth_scale);
     CameraInfo sized = cam;
@@ -77,18 +80,21 @@ void add_locate(CLI::App& app) {
     const int pick = out.pick();
     for (std::size_t i = 0; i < out.estimates.size(); ++i)
       std::cout << estimate_json(out.estimates[i], int(i), int(i) == pick).dump() << '\n';
-    spdlog::info("{} pipes found ({} candidate regions, {} cores) in {:.1f} ms; pick: {}", out.estimates.size(),
-                 out.regions.candidates, out.regions.cores_kept, out.times.total_ms,
+    spdlog::info("{} pipes found ({} candidate regions, {} cores) in {:.1f} ms; pick: {}",
+                 out.estimates.size(), out.regions.candidates, out.regions.cores_kept, out.times.total_ms,
                  pick >= 0 ? "rank " + std::to_string(pick) : std::string("none"));
     const StageTimes& st = out.times;
-    spdlog::info("stages ms: zbuffer {:.1f} normals {:.1f} regions {:.1f} axis {:.1f} ridge_icp {:.1f} refine {:.1f} verify {:.1f}",
-                 st.zbuffer_ms, st.normals_ms, st.regions_ms, st.axis_ms, st.ridge_icp_ms, st.refine_ms, st.verify_ms);
+    spdlog::info(
+        "stages ms: zbuffer {:.1f} normals {:.1f} regions {:.1f} axis {:.1f} ridge_icp {:.1f} refine {:.1f} "
+        "verify {:.1f}",
+        st.zbuffer_ms, st.normals_ms, st.regions_ms, st.axis_ms, st.ridge_icp_ms, st.refine_ms, st.verify_ms);
     for (std::size_t c = 0; c < out.traces.size(); ++c) {
       const CandidateTrace& tr = out.traces[c];
-      spdlog::info("candidate {}: {} (ridge points {}, ridge residual {:.2f} mm, axis sections {}, agreement {:.2f}, "
-                   "free space {:.2f}, occluded {:.2f})",
-                   c, outcome_name(tr.outcome), tr.ridge_count, tr.ridge_cost_mm, tr.axis.best_count,
-                   tr.check.agreement(), tr.check.free_space(), tr.check.occluded());
+      spdlog::info(
+          "candidate {}: {} (ridge points {}, ridge residual {:.2f} mm, axis sections {}, agreement {:.2f}, "
+          "free space {:.2f}, occluded {:.2f})",
+          c, outcome_name(tr.outcome), tr.ridge_count, tr.ridge_cost_mm, tr.axis.best_count,
+          tr.check.agreement(), tr.check.free_space(), tr.check.occluded());
     }
     if (!opt->overlay.empty()) {
       write_rgb_png(opt->overlay, draw_locate_overlay(locator, depth, sized));
@@ -126,8 +132,10 @@ void add_eval_bop(CLI::App& app) {
         cameras[t.scene_id] = read_scene_camera(scene_dir(opt->dataset, t.scene_id) + "/scene_camera.json");
       const auto cam_it = cameras[t.scene_id].find(t.im_id);
       if (cam_it == cameras[t.scene_id].end())
-        throw IoError("scene " + std::to_string(t.scene_id) + ": no camera for image " + std::to_string(t.im_id));
-      const Image<float> depth = read_depth_mm(depth_path(opt->dataset, t.scene_id, t.im_id), cam_it->second.depth_scale);
+        throw IoError("scene " + std::to_string(t.scene_id) + ": no camera for image " +
+                      std::to_string(t.im_id));
+      const Image<float> depth =
+          read_depth_mm(depth_path(opt->dataset, t.scene_id, t.im_id), cam_it->second.depth_scale);
       CameraInfo cam = cam_it->second;
       cam.intrinsics.width = depth.width;
       cam.intrinsics.height = depth.height;
@@ -138,7 +146,8 @@ void add_eval_bop(CLI::App& app) {
       Locator& locator = *locators[t.obj_id];
       const LocateOutput& out = locator.locate(depth, cam);
       for (const auto& e : out.estimates) {
-        write_result_row(csv, {t.scene_id, t.im_id, t.obj_id, e.score, e.model_to_cam, out.times.total_ms / 1000.0});
+        write_result_row(
+            csv, {t.scene_id, t.im_id, t.obj_id, e.score, e.model_to_cam, out.times.total_ms / 1000.0});
         ++rows;
       }
       ++images;

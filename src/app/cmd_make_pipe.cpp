@@ -24,7 +24,8 @@ void add_make_pipe(CLI::App& app) {
                   "(e.g. S60,B90r50,S40,B-80r45t120)");
   cmd->add_option("--preset", opt->preset, "sbend | u | torus (the paper's three kinds)");
   cmd->add_option("--diameter", opt->diameter, "tube diameter, mm");
-  cmd->add_option("--offset", opt->offset, "model-frame offset x y z, mm (the frame need not be centred)")->expected(3);
+  cmd->add_option("--offset", opt->offset, "model-frame offset x y z, mm (the frame need not be centred)")
+      ->expected(3);
   cmd->add_option("--rotate", opt->rotate, "model-frame rotation about x, y, z, degrees")->expected(3);
   cmd->add_flag("--ascii", opt->ascii, "write ASCII STL instead of binary");
   cmd->callback([opt] {
@@ -40,12 +41,14 @@ void add_make_pipe(CLI::App& app) {
                                    Eigen::AngleAxisd(opt->rotate[0] * d, Eigen::Vector3d::UnitX()))
                                       .toRotationMatrix();
     }
-    if (!opt->offset.empty()) spec.model_frame.translation() = Eigen::Vector3d(opt->offset[0], opt->offset[1], opt->offset[2]);
+    if (!opt->offset.empty())
+      spec.model_frame.translation() = Eigen::Vector3d(opt->offset[0], opt->offset[1], opt->offset[2]);
     const Mesh mesh = make_pipe(spec);
     write_stl(opt->out, mesh, opt->ascii ? StlFormat::ascii : StlFormat::binary);
     const PipeModel model = derive_pipe_model(mesh, opt->out);
     spdlog::info("wrote {}: {} triangles, tube diameter {:.2f} mm, longest extent L {:.1f} mm, {} symmetries",
-                 opt->out, mesh.faces.size(), model.tube_diameter_mm, model.extent_mm, model.symmetries.size());
+                 opt->out, mesh.faces.size(), model.tube_diameter_mm, model.extent_mm,
+                 model.symmetries.size());
   });
 }
 

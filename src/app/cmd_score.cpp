@@ -12,7 +12,8 @@ void add_score(CLI::App& app) {
     std::string dataset, results, json;
   };
   auto opt = std::make_shared<Options>();
-  auto* cmd = app.add_subcommand("score", "Score BOP results against a dataset's ground truth (DESIGN.md scoring)");
+  auto* cmd =
+      app.add_subcommand("score", "Score BOP results against a dataset's ground truth (DESIGN.md scoring)");
   cmd->add_option("--dataset", opt->dataset, "BOP dataset directory")->required();
   cmd->add_option("--results", opt->results, "results CSV")->required();
   cmd->add_option("--json", opt->json, "also write the figures as JSON here");

@@ -1,8 +1,9 @@
 #include "config/config_file.hpp"
 
+#include <toml++/toml.h>
+
 #include <filesystem>
 #include <sstream>
-#include <toml++/toml.h>
 
 namespace pipeloc {
 namespace {
@@ -15,8 +16,10 @@ struct Field {
   const char* unit;
 };
 
-#define REAL(name, lo, hi, unit) Field{#name, &LocateConfig::name, nullptr, lo, hi, unit}
-#define INT(name, lo, hi, unit) Field{#name, nullptr, &LocateConfig::name, lo, hi, unit}
+#define REAL(name, lo, hi, unit) \
+  Field { #name, &LocateConfig::name, nullptr, lo, hi, unit }
+#define INT(name, lo, hi, unit) \
+  Field { #name, nullptr, &LocateConfig::name, lo, hi, unit }
 
 const Field kLocateFields[] = {
     REAL(zbuffer_pixel_mm, 0.25, 10, "mm"),
@@ -69,8 +72,8 @@ void read_locate(const std::string& path, const toml::table& table, LocateConfig
     const std::string name = "locate." + std::string(key.str());
     if (!field) fail(path, name, "unknown key");
     std::ostringstream range;
-    range << "expected " << (field->integer ? "an integer" : "a number") << " in [" << field->min << ", " << field->max
-          << "] " << field->unit;
+    range << "expected " << (field->integer ? "an integer" : "a number") << " in [" << field->min << ", "
+          << field->max << "] " << field->unit;
     double value;
     if (field->integer) {
       const auto v = node.value_exact<std::int64_t>();

@@ -23,7 +23,7 @@ struct Intrinsics {
 
 struct CameraInfo {
   Intrinsics intrinsics;
-  double depth_scale = 1.0;        // depth_mm = png value * depth_scale
+  double depth_scale = 1.0;          // depth_mm = png value * depth_scale
   std::optional<Pose> world_to_cam;  // cam_R_w2c / cam_t_w2c: world Z points up
 };
 

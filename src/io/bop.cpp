@@ -93,14 +93,15 @@ std::map<int, CameraInfo> read_scene_camera(const std::string& path) {
     cam.intrinsics.cy = k[5];
     if (!(k[0] > 0 && k[4] > 0))
       throw IoError("'" + path + "': " + where + ".cam_K: focal lengths must be > 0");
-    if (value.contains("width")) cam.intrinsics.width = json_field<int>(value, "width", path, where, "an integer");
-    if (value.contains("height")) cam.intrinsics.height = json_field<int>(value, "height", path, where, "an integer");
+    if (value.contains("width"))
+      cam.intrinsics.width = json_field<int>(value, "width", path, where, "an integer");
+    if (value.contains("height"))
+      cam.intrinsics.height = json_field<int>(value, "height", path, where, "an integer");
     cam.depth_scale = json_field<double>(value, "depth_scale", path, where, "a number");
     if (!(cam.depth_scale > 0))
       throw IoError("'" + path + "': " + where + ".depth_scale: expected a number > 0");
     const bool has_r = value.contains("cam_R_w2c"), has_t = value.contains("cam_t_w2c");
-    if (has_r != has_t)
-      throw IoError("'" + path + "': " + where + ": cam_R_w2c and cam_t_w2c come together");
+    if (has_r != has_t) throw IoError("'" + path + "': " + where + ": cam_R_w2c and cam_t_w2c come together");
     if (has_r)
       cam.world_to_cam = pose_from_rt(fixed_array<9>(value, "cam_R_w2c", path, where),
                                       fixed_array<3>(value, "cam_t_w2c", path, where));
@@ -183,8 +184,7 @@ std::map<int, ModelInfo> read_models_info(const std::string& path) {
 Image<float> read_depth_mm(const std::string& png_path, double depth_scale) {
   const Image<std::uint16_t> raw = read_depth_png(png_path);
   Image<float> depth(raw.width, raw.height);
-  for (std::size_t i = 0; i < raw.pixels.size(); ++i)
-    depth.pixels[i] = float(raw.pixels[i] * depth_scale);
+  for (std::size_t i = 0; i < raw.pixels.size(); ++i) depth.pixels[i] = float(raw.pixels[i] * depth_scale);
   return depth;
 }
 
@@ -208,9 +208,9 @@ Json pose_to_gt_json(int obj_id, const Pose& model_to_cam) {
 }
 
 Json gt_info_to_json(const GtInfo& g) {
-  return {{"px_count_all", g.px_count_all}, {"px_count_visib", g.px_count_visib},
+  return {{"px_count_all", g.px_count_all},     {"px_count_visib", g.px_count_visib},
           {"px_count_valid", g.px_count_valid}, {"visib_fract", g.visib_fract},
-          {"occ_by_pipes", g.occ_by_pipes}, {"top", g.top}};
+          {"occ_by_pipes", g.occ_by_pipes},     {"top", g.top}};
 }
 
 }  // namespace pipeloc

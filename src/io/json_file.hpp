@@ -15,8 +15,8 @@ void write_json(const std::string& path, const Json& value, int indent = 1);
 
 // Fetches `key` of `obj` as T; throws IoError "<path>: <where>.<key>: expected <what>".
 template <typename T>
-T json_field(const Json& obj, const std::string& key, const std::string& path,
-             const std::string& where, const char* what) {
+T json_field(const Json& obj, const std::string& key, const std::string& path, const std::string& where,
+             const char* what) {
   if (!obj.is_object() || !obj.contains(key))
     throw IoError("'" + path + "': " + where + ": missing '" + key + "' (" + what + ")");
   try {

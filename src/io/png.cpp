@@ -69,8 +69,7 @@ Image<std::uint16_t> read_depth_png(const std::string& path) {
       png_set_swap(png);  // PNG stores 16-bit big-endian
       depth.resize(int(w), int(h));
       rows.resize(h);
-      for (png_uint_32 y = 0; y < h; ++y)
-        rows[y] = reinterpret_cast<png_bytep>(&depth.at(0, int(y)));
+      for (png_uint_32 y = 0; y < h; ++y) rows[y] = reinterpret_cast<png_bytep>(&depth.at(0, int(y)));
       png_read_image(png, rows.data());
       png_read_end(png, nullptr);
     }
@@ -83,8 +82,8 @@ Image<std::uint16_t> read_depth_png(const std::string& path) {
 
 namespace {
 
-void write_png(const std::string& path, int width, int height, int bit_depth, int color,
-               int bytes_per_row, const std::uint8_t* data, bool swap16) {
+void write_png(const std::string& path, int width, int height, int bit_depth, int color, int bytes_per_row,
+               const std::uint8_t* data, bool swap16) {
   File file(std::fopen(path.c_str(), "wb"));
   if (!file) throw IoError("PNG '" + path + "': cannot open for writing");
   ErrorSink sink;
@@ -98,8 +97,8 @@ void write_png(const std::string& path, int width, int height, int bit_depth, in
   for (int y = 0; y < height; ++y) rows[y] = const_cast<png_bytep>(data + std::size_t(y) * bytes_per_row);
   const bool ok = guarded(png, [&] {
     png_init_io(png, file.get());
-    png_set_IHDR(png, info, width, height, bit_depth, color, PNG_INTERLACE_NONE,
-                 PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+    png_set_IHDR(png, info, width, height, bit_depth, color, PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
+                 PNG_FILTER_TYPE_DEFAULT);
     png_set_compression_level(png, 3);
     png_write_info(png, info);
     if (swap16) png_set_swap(png);

@@ -40,7 +40,8 @@ ResultsFile read_results_csv(const std::string& path) {
   int line_no = 0;
   auto reject = [&](const std::string& why) {
     ++file.malformed;
-    if (file.first_errors.size() < 5) file.first_errors.push_back("line " + std::to_string(line_no) + ": " + why);
+    if (file.first_errors.size() < 5)
+      file.first_errors.push_back("line " + std::to_string(line_no) + ": " + why);
   };
   while (std::getline(in, line)) {
     ++line_no;
@@ -72,11 +73,13 @@ ResultsFile read_results_csv(const std::string& path) {
     }
     Eigen::Matrix3d m;
     m << r[0], r[1], r[2], r[3], r[4], r[5], r[6], r[7], r[8];
-    if (std::abs(m.determinant() - 1.0) > 1e-2 || (m.transpose() * m - Eigen::Matrix3d::Identity()).norm() > 1e-2) {
+    if (std::abs(m.determinant() - 1.0) > 1e-2 ||
+        (m.transpose() * m - Eigen::Matrix3d::Identity()).norm() > 1e-2) {
       reject("R is not a rotation");
       continue;
     }
-    row.model_to_cam = pose_from_rt({r[0], r[1], r[2], r[3], r[4], r[5], r[6], r[7], r[8]}, {t[0], t[1], t[2]});
+    row.model_to_cam =
+        pose_from_rt({r[0], r[1], r[2], r[3], r[4], r[5], r[6], r[7], r[8]}, {t[0], t[1], t[2]});
     row.time_s = parse_numbers(fields[6], 1, &one) ? one[0] : -1;
     file.rows.push_back(row);
   }

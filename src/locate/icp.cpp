@@ -19,18 +19,20 @@ int nearest(const Eigen::Vector3f& q, const Eigen::Vector3f* pts, int n, float* 
   return best;
 }
 
-int model_ridge(const LocatorModel& lm, const Pose& pose, const Eigen::Vector2f& axis, const LocateConfig& cfg,
-                IcpBuffers* buf) {
+int model_ridge(const LocatorModel& lm, const Pose& pose, const Eigen::Vector2f& axis,
+                const LocateConfig& cfg, IcpBuffers* buf) {
   const Eigen::Matrix3f r = pose.linear().cast<float>();
   const Eigen::Vector3f t = pose.translation().cast<float>();
   const int n = int(lm.ridge_samples.size());
   for (int i = 0; i < n; ++i) buf->moved[i] = r * lm.ridge_samples[i] + t;
-  return extract_zridge(buf->moved.data(), n, axis, float(cfg.ridge_cell_mm), 0.3f * lm.tube_d_mm, &buf->ridge,
-                        buf->model_ridge.data(), int(buf->model_ridge.size()), cfg.match_surface);
+  return extract_zridge(buf->moved.data(), n, axis, float(cfg.ridge_cell_mm), 0.3f * lm.tube_d_mm,
+                        &buf->ridge, buf->model_ridge.data(), int(buf->model_ridge.size()),
+                        cfg.match_surface);
 }
 
 // Mean of min(distance, cap) from each of a to its nearest in b.
-float truncated_mean(const Eigen::Vector3f* a, int na, const Eigen::Vector3f* b, int nb, float cap, int* matched) {
+float truncated_mean(const Eigen::Vector3f* a, int na, const Eigen::Vector3f* b, int nb, float cap,
+                     int* matched) {
   if (na == 0) return cap;
   float sum = 0;
   int m = 0;
@@ -105,8 +107,8 @@ RidgeFit ridge_icp(const LocatorModel& lm, const Pose& start, const Eigen::Vecto
     const Pose delta = fit_rigid(buf->src.data(), buf->dst.data(), pairs);  // 2.2.3
     fit.pose = delta * fit.pose;
     gate = std::max(0.5f * d, gate * 0.7f);
-    const double moved = delta.translation().norm() +
-                         Eigen::AngleAxisd(delta.linear()).angle() * lm.extent_l_mm / 2;
+    const double moved =
+        delta.translation().norm() + Eigen::AngleAxisd(delta.linear()).angle() * lm.extent_l_mm / 2;
     if (moved < cfg.icp_converged_mm && gate <= 0.5f * d) break;
   }
   const int nm = model_ridge(lm, fit.pose, axis, cfg, buf);

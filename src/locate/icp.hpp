@@ -24,8 +24,8 @@ struct RidgeFit {
   float cost_mm = 1e30f;         // mean truncated ridge distance, both ways
   int iterations = 0;
   int model_ridge_points = 0;
-  int matched = 0;               // model ridge points with an observed partner within D/2
-  float gate_mm = 0;             // correspondence gate reached (to resume from)
+  int matched = 0;    // model ridge points with an observed partner within D/2
+  float gate_mm = 0;  // correspondence gate reached (to resume from)
 };
 
 // Rigid transform taking src onto dst in the least-squares sense (Kabsch), fixed-size maths.
@@ -33,9 +33,9 @@ Pose fit_rigid(const Eigen::Vector3f* src, const Eigen::Vector3f* dst, int n);
 
 // One run of Algorithm 2's inner loop from `start`.
 // `gate_mm` < 0 starts the correspondence gate at L/3 (a cold start).
-RidgeFit ridge_icp(const LocatorModel& lm, const Pose& start, const Eigen::Vector3f* observed_ridge, int n_observed,
-                   const Eigen::Vector2f& axis, const LocateConfig& cfg, int max_iterations, IcpBuffers* buf,
-                   float gate_mm = -1);
+RidgeFit ridge_icp(const LocatorModel& lm, const Pose& start, const Eigen::Vector3f* observed_ridge,
+                   int n_observed, const Eigen::Vector2f& axis, const LocateConfig& cfg, int max_iterations,
+                   IcpBuffers* buf, float gate_mm = -1);
 
 struct RefineResult {
   Pose pose = Pose::Identity();
@@ -44,7 +44,7 @@ struct RefineResult {
 };
 
 // Point-to-plane ICP of observed points (bin frame) onto the model surface.
-RefineResult refine_on_surface(const LocatorModel& lm, const Pose& start, const Eigen::Vector3f* observed, int n,
-                               const LocateConfig& cfg);
+RefineResult refine_on_surface(const LocatorModel& lm, const Pose& start, const Eigen::Vector3f* observed,
+                               int n, const LocateConfig& cfg);
 
 }  // namespace pipeloc

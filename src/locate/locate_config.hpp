@@ -14,14 +14,16 @@ struct LocateConfig {
   double normal_min_valid_share = 0.4;  // of the window's cells; fewer and the cell has no normal
 
   // II-B, Algorithm 1: candidate regions.
-  double upward_normal_max_deg = 25;    // core cells: N . Nv > cos(this)   (N_th1)
-  double continuity_max_deg = 25;       // growth: N_i . N_j > cos(this)
-  double continuity_step_max_mm = 8;    // growth: no jump between neighbours (3 sigma of the difference of two noisy cells at 1.1 m)
+  double upward_normal_max_deg = 25;  // core cells: N . Nv > cos(this)   (N_th1)
+  double continuity_max_deg = 25;     // growth: N_i . N_j > cos(this)
+  double continuity_step_max_mm =
+      8;  // growth: no jump between neighbours (3 sigma of the difference of two noisy cells at 1.1 m)
   double core_min_area_of_d2 = 0.75;    // A_th = this * D^2
   double core_max_extent_of_l = 1.15;   // a core longer than the pipe is not one pipe (bin rims, floor)
   double region_min_extent_of_l = 0.7;  // a of the paper
   double region_max_drop_of_d = 0.8;    // grown cells lie at most this far below their core
-  double convexity_min_share = 0.6;     // of the cells grown straight from a core, at least this share tilt away from it
+  double convexity_min_share =
+      0.6;  // of the cells grown straight from a core, at least this share tilt away from it
 
   // III: principal direction by cross-section widths.
   double section_width_min_of_d = 0.85;  // the paper's 0.9R..1.0R, widened by one cell each side
@@ -30,23 +32,23 @@ struct LocateConfig {
 
   // IV: Z-ridge ICP from 2 x initial_rotations starts.
   double ridge_cell_mm = 2.0;
-  int initial_rotations = 6;           // 0/120/240 degrees about the axis
+  int initial_rotations = 6;  // 0/120/240 degrees about the axis
   int icp_max_iterations = 24;
-  int icp_probe_iterations = 6;        // every initial state gets this many ...
-  int icp_continued_states = 4;        // ... and the best this many run to convergence
+  int icp_probe_iterations = 6;  // every initial state gets this many ...
+  int icp_continued_states = 4;  // ... and the best this many run to convergence
   double icp_converged_mm = 0.05;
-  double residual_max_of_d = 0.35;     // R_th = this * D (mean ridge distance; verification follows)
+  double residual_max_of_d = 0.35;  // R_th = this * D (mean ridge distance; verification follows)
 
   // Beyond the paper: surface refinement, verification, ambiguity.
   int refine_iterations = 12;
-  int refine_max_points = 1500;         // observed points used by the refinement
-  double refine_inlier_mm = 4;          // point-to-plane pairs farther than this are not the pipe
-  double verify_tolerance_mm = 7;       // about 3 sigma of axial noise at 1.1 m plus a disparity step
-  double verify_min_agreement = 0.6;    // share of the model's visible pixels the sensor confirms
-  double verify_max_free_space = 0.05;  // share of model pixels where the sensor saw through it
-  double verify_max_occluded = 0.15;    // share of model pixels covered by something in front
-  int verify_hypotheses = 3;            // distinct ridge fits refined and checked per region
-  double ambiguity_pose_mm = 10;        // two fits further apart than this (MSSD) ...
+  int refine_max_points = 1500;            // observed points used by the refinement
+  double refine_inlier_mm = 4;             // point-to-plane pairs farther than this are not the pipe
+  double verify_tolerance_mm = 7;          // about 3 sigma of axial noise at 1.1 m plus a disparity step
+  double verify_min_agreement = 0.6;       // share of the model's visible pixels the sensor confirms
+  double verify_max_free_space = 0.05;     // share of model pixels where the sensor saw through it
+  double verify_max_occluded = 0.15;       // share of model pixels covered by something in front
+  int verify_hypotheses = 3;               // distinct ridge fits refined and checked per region
+  double ambiguity_pose_mm = 10;           // two fits further apart than this (MSSD) ...
   double ambiguity_quality_margin = 0.05;  // ... both confirmed within this margin: ambiguous
 
   // The paper's comparison: ICP on points sampled from the whole visible surface instead of the

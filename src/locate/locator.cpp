@@ -26,18 +26,27 @@ Pose initial_state(const LocatorModel& lm, const AxisEstimate& est, bool reverse
 
 const char* outcome_name(CandidateOutcome o) {
   switch (o) {
-    case CandidateOutcome::accepted: return "accepted";
-    case CandidateOutcome::few_ridge_points: return "few_ridge_points";
-    case CandidateOutcome::residual_too_high: return "residual_too_high";
-    case CandidateOutcome::not_confirmed: return "not_confirmed";
-    case CandidateOutcome::duplicate: return "duplicate";
-    case CandidateOutcome::budget: return "budget";
+    case CandidateOutcome::accepted:
+      return "accepted";
+    case CandidateOutcome::few_ridge_points:
+      return "few_ridge_points";
+    case CandidateOutcome::residual_too_high:
+      return "residual_too_high";
+    case CandidateOutcome::not_confirmed:
+      return "not_confirmed";
+    case CandidateOutcome::duplicate:
+      return "duplicate";
+    case CandidateOutcome::budget:
+      return "budget";
   }
   return "?";
 }
 
 Locator::Locator(const PipeModel& model, const LocateConfig& cfg, const Intrinsics& camera)
-    : model_(model), cfg_(cfg), workers_(std::size_t(std::max(1, cfg.threads))), pool_(std::max(1, cfg.threads)) {
+    : model_(model),
+      cfg_(cfg),
+      workers_(std::size_t(std::max(1, cfg.threads))),
+      pool_(std::max(1, cfg.threads)) {
   lm_ = prepare_locator_model(model, float(cfg.refine_inlier_mm) + 4.0f, cfg);
   reserve_zbuffer(&zb_, cfg.zbuffer_max_side_mm, cfg.zbuffer_pixel_mm);
   reserve_normals(&nm_, zb_);
@@ -48,7 +57,8 @@ Locator::Locator(const PipeModel& model, const LocateConfig& cfg, const Intrinsi
   ridge_capacity_ = int(3 * (lm_.extent_l_mm + 2 * lm_.tube_d_mm) / cfg.ridge_cell_mm) + 16;
   if (cfg.match_surface)  // every ridge cell of the region, not one per line
     ridge_capacity_ = int(rb_.max_region_cells * cfg.zbuffer_pixel_mm * cfg.zbuffer_pixel_mm /
-                          (cfg.ridge_cell_mm * cfg.ridge_cell_mm)) + 16;
+                          (cfg.ridge_cell_mm * cfg.ridge_cell_mm)) +
+                      16;
   for (Worker& wk : workers_) {
     wk.ab.keys.assign(std::size_t(rb_.max_region_cells), 0);
     reserve_icp(&wk.icp, lm_, ridge_capacity_, float(cfg.ridge_cell_mm));
@@ -63,7 +73,8 @@ Locator::Locator(const PipeModel& model, const LocateConfig& cfg, const Intrinsi
   out_.traces.reserve(std::size_t(cfg.max_candidates));
 }
 
-const LocateOutput& Locator::locate(const Image<float>& depth, const CameraInfo& camera, Clock::time_point deadline) {
+const LocateOutput& Locator::locate(const Image<float>& depth, const CameraInfo& camera,
+                                    Clock::time_point deadline) {
   const auto t_start = Clock::now();
   out_.estimates.clear();
   out_.traces.clear();
@@ -74,8 +85,8 @@ const LocateOutput& Locator::locate(const Image<float>& depth, const CameraInfo&
 
   auto t = Clock::now();
   out_.valid_pixels = build_zbuffer(depth, camera.intrinsics, bin_to_cam, &zb_);
-  fill_small_holes(&zb_, int(std::lround(cfg_.hole_fill_mm / 2 / zb_.pixel_mm)), float(cfg_.continuity_step_max_mm),
-                   &hole_scratch_);
+  fill_small_holes(&zb_, int(std::lround(cfg_.hole_fill_mm / 2 / zb_.pixel_mm)),
+                   float(cfg_.continuity_step_max_mm), &hole_scratch_);
   out_.times.zbuffer_ms = ms_since(t);
 
   t = Clock::now();
@@ -155,8 +166,8 @@ void Locator::work_candidate(int c, Worker& wk, const Image<float>& depth, const
   for (int k = 0; k < count; ++k) wk.region_pts[std::size_t(k)] = zb_.point(cells[k] % w, cells[k] / w);
   Eigen::Vector3f* ridge = &ridge_pts_[std::size_t(c) * ridge_capacity_];
   trace.ridge_begin = c * ridge_capacity_;
-  trace.ridge_count = extract_zridge(wk.region_pts.data(), count, trace.axis.axis, float(cfg_.ridge_cell_mm), 0.3f * d,
-                                     &wk.icp.ridge, ridge, ridge_capacity_, cfg_.match_surface);
+  trace.ridge_count = extract_zridge(wk.region_pts.data(), count, trace.axis.axis, float(cfg_.ridge_cell_mm),
+                                     0.3f * d, &wk.icp.ridge, ridge, ridge_capacity_, cfg_.match_surface);
   if (trace.ridge_count < 10) {
     trace.outcome = CandidateOutcome::few_ridge_points;
     wk.times.ridge_icp_ms += ms_since(t);
@@ -171,7 +182,8 @@ void Locator::work_candidate(int c, Worker& wk, const Image<float>& depth, const
     for (int r = 0; r < turns; ++r)
       wk.fits.push_back(ridge_icp(lm_, initial_state(lm_, trace.axis, dir == 1, r), ridge, trace.ridge_count,
                                   trace.axis.axis, cfg_, cfg_.icp_probe_iterations, &wk.icp));
-  std::sort(wk.fits.begin(), wk.fits.end(), [](const RidgeFit& x, const RidgeFit& y) { return x.cost_mm < y.cost_mm; });
+  std::sort(wk.fits.begin(), wk.fits.end(),
+            [](const RidgeFit& x, const RidgeFit& y) { return x.cost_mm < y.cost_mm; });
   const int keep = std::min(int(wk.fits.size()), cfg_.icp_continued_states);
   for (int i = 0; i < keep; ++i) {
     RidgeFit& f = wk.fits[std::size_t(i)];
@@ -183,8 +195,10 @@ void Locator::work_candidate(int c, Worker& wk, const Image<float>& depth, const
   // The refinement needs far fewer points than the region holds: keep an even subset.
   const int stride = std::max(1, count / cfg_.refine_max_points);
   int refine_count = 0;
-  for (int k = 0; k < count; k += stride) wk.region_pts[std::size_t(refine_count++)] = wk.region_pts[std::size_t(k)];
-  std::sort(wk.fits.begin(), wk.fits.end(), [](const RidgeFit& x, const RidgeFit& y) { return x.cost_mm < y.cost_mm; });
+  for (int k = 0; k < count; k += stride)
+    wk.region_pts[std::size_t(refine_count++)] = wk.region_pts[std::size_t(k)];
+  std::sort(wk.fits.begin(), wk.fits.end(),
+            [](const RidgeFit& x, const RidgeFit& y) { return x.cost_mm < y.cost_mm; });
   wk.times.ridge_icp_ms += ms_since(t);
   trace.ridge_pose = wk.fits[0].pose;
   trace.ridge_cost_mm = wk.fits[0].cost_mm;
@@ -210,14 +224,15 @@ void Locator::work_candidate(int c, Worker& wk, const Image<float>& depth, const
     if (seen) continue;
     ++tried;
     t = Clock::now();
-    const RefineResult refined = refine_on_surface(lm_, wk.fits[i].pose, wk.region_pts.data(), refine_count, cfg_);
+    const RefineResult refined =
+        refine_on_surface(lm_, wk.fits[i].pose, wk.region_pts.data(), refine_count, cfg_);
     wk.times.refine_ms += ms_since(t);
     t = Clock::now();
     PipeEstimate e;
     e.model_to_bin = refined.pose;
     e.model_to_cam = bin_to_cam * refined.pose;
-    e.check = verify_pose(model_.mesh, e.model_to_cam, depth, camera.intrinsics, float(cfg_.verify_tolerance_mm),
-                          &wk.scratch_depth);
+    e.check = verify_pose(model_.mesh, e.model_to_cam, depth, camera.intrinsics,
+                          float(cfg_.verify_tolerance_mm), &wk.scratch_depth);
     wk.times.verify_ms += ms_since(t);
     e.ridge_cost_mm = wk.fits[i].cost_mm;
     e.ridge_points = trace.ridge_count;
@@ -225,7 +240,8 @@ void Locator::work_candidate(int c, Worker& wk, const Image<float>& depth, const
     e.refine_rms_mm = refined.rms_mm;
     e.candidate = c;
     if (!have_best || quality(e.check) > quality(best.check)) {
-      if (have_best && pose_distance_mm(lm_, best.model_to_bin, e.model_to_bin) > float(cfg_.ambiguity_pose_mm))
+      if (have_best &&
+          pose_distance_mm(lm_, best.model_to_bin, e.model_to_bin) > float(cfg_.ambiguity_pose_mm))
         second = best, have_second = true;
       best = e, have_best = true;
     } else if (!have_second || quality(e.check) > quality(second.check)) {
@@ -235,7 +251,8 @@ void Locator::work_candidate(int c, Worker& wk, const Image<float>& depth, const
   }
   PipeEstimate& e = best;
   trace.check = e.check;
-  if (e.check.agreement() < float(cfg_.verify_min_agreement) || e.check.free_space() > float(cfg_.verify_max_free_space)) {
+  if (e.check.agreement() < float(cfg_.verify_min_agreement) ||
+      e.check.free_space() > float(cfg_.verify_max_free_space)) {
     trace.outcome = CandidateOutcome::not_confirmed;
     return;
   }

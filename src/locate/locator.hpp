@@ -17,27 +17,34 @@ namespace pipeloc {
 struct PipeEstimate {
   Pose model_to_bin = Pose::Identity();
   Pose model_to_cam = Pose::Identity();
-  float score = 0;              // share of the model's silhouette the sensor confirms, lowered when occluded or ambiguous
-  float ridge_cost_mm = 0;      // Algorithm 2 residual (mean truncated ridge distance)
-  int ridge_points = 0;         // observed Z-ridge points of the region
+  float score = 0;  // share of the model's silhouette the sensor confirms, lowered when occluded or ambiguous
+  float ridge_cost_mm = 0;  // Algorithm 2 residual (mean truncated ridge distance)
+  int ridge_points = 0;     // observed Z-ridge points of the region
   int refine_inliers = 0;
   float refine_rms_mm = 0;
   Verification check;
-  bool ambiguous = false;       // another pose of the model fits about as well (torus-like pipes)
-  bool pickable = false;        // accepted, not lying under another pipe, not ambiguous
-  int candidate = -1;           // index of its candidate region
+  bool ambiguous = false;  // another pose of the model fits about as well (torus-like pipes)
+  bool pickable = false;   // accepted, not lying under another pipe, not ambiguous
+  int candidate = -1;      // index of its candidate region
 };
 
 // Why a candidate did not become an estimate.
-enum class CandidateOutcome { accepted, few_ridge_points, residual_too_high, not_confirmed, duplicate, budget };
+enum class CandidateOutcome {
+  accepted,
+  few_ridge_points,
+  residual_too_high,
+  not_confirmed,
+  duplicate,
+  budget
+};
 const char* outcome_name(CandidateOutcome o);
 
 struct CandidateTrace {
   AxisEstimate axis;
   int ridge_begin = 0, ridge_count = 0;  // observed ridge points in Locator::ridge_points()
-  Pose ridge_pose = Pose::Identity();     // after Algorithm 2, before refinement
+  Pose ridge_pose = Pose::Identity();    // after Algorithm 2, before refinement
   float ridge_cost_mm = 0;
-  Verification check;                     // of the best refined fit
+  Verification check;  // of the best refined fit
   CandidateOutcome outcome = CandidateOutcome::budget;
 };
 
@@ -96,7 +103,8 @@ class Locator {
     Clock::time_point deadline;
   };
   static void candidate_task(void* frame, int c, int worker);
-  void work_candidate(int c, Worker& wk, const Image<float>& depth, const CameraInfo& camera, const Pose& bin_to_cam);
+  void work_candidate(int c, Worker& wk, const Image<float>& depth, const CameraInfo& camera,
+                      const Pose& bin_to_cam);
   void merge_estimate(int c);
 
   const PipeModel& model_;
@@ -108,8 +116,8 @@ class Locator {
   RegionBuffers rb_;
   std::vector<Worker> workers_;
   WorkerPool pool_;
-  std::vector<Eigen::Vector3f> ridge_pts_;   // observed ridges of all candidates
-  std::vector<PipeEstimate> slot_;           // per candidate: its estimate, if accepted
+  std::vector<Eigen::Vector3f> ridge_pts_;  // observed ridges of all candidates
+  std::vector<PipeEstimate> slot_;          // per candidate: its estimate, if accepted
   std::vector<char> slot_filled_;
   LocateOutput out_;
   int ridge_capacity_ = 0;

@@ -10,25 +10,19 @@
 
 namespace pipeloc {
 
-namespace {
-
-// The model at `rotation`, seen from above as the localizer sees a pipe: its principal
-// direction and centre by III, and the pose that puts them on +X and the origin.
-Pose canonical_start(const PipeModel& model, const Eigen::Matrix3d& rotation, const LocateConfig& cfg) {
-  Pose lying = Pose::Identity();
-  lying.linear() = rotation;
+AxisEstimate top_view_axis(const PipeModel& model, const Pose& model_to_bin, const LocateConfig& cfg) {
   HeightMap hm;
   hm.cell_mm = cfg.zbuffer_pixel_mm;
   Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e30), hi = -lo;
   for (const auto& v : model.mesh.vertices) {
-    const Eigen::Vector3d p = rotation * v.cast<double>();
+    const Eigen::Vector3d p = model_to_bin * v.cast<double>();
     lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
   }
   hm.origin_x_mm = lo.x() - 2 * hm.cell_mm;
   hm.origin_y_mm = lo.y() - 2 * hm.cell_mm;
   const int w = int((hi.x() - lo.x()) / hm.cell_mm) + 5, h = int((hi.y() - lo.y()) / hm.cell_mm) + 5;
   hm.z_mm.resize(w, h, -1e30f);
-  render_height(model.mesh, lying, Envelope::top, &hm);
+  render_height(model.mesh, model_to_bin, Envelope::top, &hm);
   ZBuffer zb;
   zb.origin_x_mm = hm.origin_x_mm;
   zb.origin_y_mm = hm.origin_y_mm;
@@ -48,8 +42,17 @@ Pose canonical_start(const PipeModel& model, const Eigen::Matrix3d& rotation, co
   centroid /= float(std::max<std::size_t>(1, cells.size()));
   AxisBuffers buf;
   buf.keys.resize(cells.size());
-  const AxisEstimate est = estimate_axis(zb, cells.data(), int(cells.size()), centroid, cfg, model.tube_diameter_mm, &buf);
-  // Turn about Z so the measured axis lies along +X, then move the measured centre to the origin.
+  return estimate_axis(zb, cells.data(), int(cells.size()), centroid, cfg, model.tube_diameter_mm, &buf);
+}
+
+namespace {
+
+// The model at `rotation`, seen from above as the localizer sees a pipe, moved so that its
+// measured principal direction lies on +X and its measured centre at the origin.
+Pose canonical_start(const PipeModel& model, const Eigen::Matrix3d& rotation, const LocateConfig& cfg) {
+  Pose lying = Pose::Identity();
+  lying.linear() = rotation;
+  const AxisEstimate est = top_view_axis(model, lying, cfg);
   const double yaw = -std::atan2(est.axis.y(), est.axis.x());
   Pose to_canonical = Pose::Identity();
   to_canonical.linear() = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
@@ -81,7 +84,8 @@ LocatorModel prepare_locator_model(const PipeModel& model, float margin_mm, cons
   const std::size_t stride = std::max<std::size_t>(1, pts.size() / want);
   for (std::size_t i = 0; i < pts.size(); i += stride) lm.ridge_samples.push_back(pts[i]);
   const std::size_t vstride = std::max<std::size_t>(1, model.mesh.vertices.size() / 64);
-  for (std::size_t i = 0; i < model.mesh.vertices.size(); i += vstride) lm.check_points.push_back(model.mesh.vertices[i]);
+  for (std::size_t i = 0; i < model.mesh.vertices.size(); i += vstride)
+    lm.check_points.push_back(model.mesh.vertices[i]);
 
   // Voxel index by multi-source breadth-first propagation from each sample's voxel.
   Eigen::Vector3f lo = pts[0], hi = pts[0];
@@ -134,7 +138,8 @@ LocatorModel prepare_locator_model(const PipeModel& model, float margin_mm, cons
   const int turns = std::max(1, cfg.initial_rotations);
   for (int k = 0; k < turns; ++k)
     lm.canonical_starts.push_back(canonical_start(
-        model, Eigen::AngleAxisd(2 * M_PI * k / turns, Eigen::Vector3d::UnitX()).toRotationMatrix() * lying, cfg));
+        model, Eigen::AngleAxisd(2 * M_PI * k / turns, Eigen::Vector3d::UnitX()).toRotationMatrix() * lying,
+        cfg));
   return lm;
 }
 

@@ -14,8 +14,8 @@ struct LocatorModel {
   Eigen::Vector3f axis = Eigen::Vector3f::UnitX();  // direction of largest spread (model frame)
   Eigen::Vector3f up = Eigen::Vector3f::UnitZ();    // direction of least spread
   Eigen::Vector3f centroid = Eigen::Vector3f::Zero();
-  std::vector<Eigen::Vector3f> ridge_samples;       // subset of surface samples for the Z-ridge
-  std::vector<Eigen::Vector3f> check_points;        // vertices spread over the part, for pose distances
+  std::vector<Eigen::Vector3f> ridge_samples;  // subset of surface samples for the Z-ridge
+  std::vector<Eigen::Vector3f> check_points;   // vertices spread over the part, for pose distances
   float tube_d_mm = 0, extent_l_mm = 0;
 
   // IV-B initial states, one per turn about the axis: the model lying turned by 360/turns * k,
@@ -38,7 +38,11 @@ struct LocatorModel {
 };
 
 struct LocateConfig;
+struct AxisEstimate;
 LocatorModel prepare_locator_model(const PipeModel& model, float margin_mm, const LocateConfig& cfg);
+
+// III applied to the model's ideal top view at model_to_bin (the whole silhouette, no noise).
+AxisEstimate top_view_axis(const PipeModel& model, const Pose& model_to_bin, const LocateConfig& cfg);
 
 // Largest distance of the check points between two poses, minimised over the model's symmetries.
 float pose_distance_mm(const LocatorModel& lm, const Pose& a, const Pose& b);

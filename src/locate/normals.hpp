@@ -8,8 +8,8 @@
 namespace pipeloc {
 
 struct NormalMap {
-  Image<Eigen::Vector3f> n;     // unit, Z up; zero where there is no normal
-  std::vector<double> column;   // running column sums, 9 per cell column (fixed size)
+  Image<Eigen::Vector3f> n;    // unit, Z up; zero where there is no normal
+  std::vector<double> column;  // running column sums, 9 per cell column (fixed size)
 };
 
 void reserve_normals(NormalMap* nm, const ZBuffer& zb);

@@ -25,7 +25,9 @@ int count_sections(const ZBuffer& zb, const int* cells, int count, float theta, 
   while (k < count) {
     int e = k;
     // A run continues while the next cell of the same line is at most 1.5 cells away.
-    while (e + 1 < count && (keys[e + 1] >> 32) == (keys[k] >> 32) && (keys[e + 1] & 0xffffffff) - (keys[e] & 0xffffffff) <= 6) ++e;
+    while (e + 1 < count && (keys[e + 1] >> 32) == (keys[k] >> 32) &&
+           (keys[e + 1] & 0xffffffff) - (keys[e] & 0xffffffff) <= 6)
+      ++e;
     const float width = (float((keys[e] & 0xffffffff) - (keys[k] & 0xffffffff)) / 4 + 1) * p;
     sections += width >= min_w && width <= max_w;
     k = e + 1;
@@ -33,8 +35,9 @@ int count_sections(const ZBuffer& zb, const int* cells, int count, float theta, 
   return sections;
 }
 
-AxisEstimate estimate_axis(const ZBuffer& zb, const int* cells, int count, const Eigen::Vector3f& core_centroid,
-                           const LocateConfig& cfg, float d, AxisBuffers* buf) {
+AxisEstimate estimate_axis(const ZBuffer& zb, const int* cells, int count,
+                           const Eigen::Vector3f& core_centroid, const LocateConfig& cfg, float d,
+                           AxisBuffers* buf) {
   AxisEstimate est;
   const float min_w = float(cfg.section_width_min_of_d) * d, max_w = float(cfg.section_width_max_of_d) * d;
   const float step = float(cfg.scan_step_deg * M_PI / 180.0);

@@ -11,10 +11,10 @@
 namespace pipeloc {
 
 struct AxisEstimate {
-  Eigen::Vector2f axis = Eigen::Vector2f::UnitX();  // unit, in the bin's XY plane
-  Eigen::Vector3f centre = Eigen::Vector3f::Zero(); // mid-point of the region along the axis line
-  int best_count = 0;                               // cross-sections of width 0.9R..1.0R at the best angle
-  float scan_deg = 0;                               // scan direction with most such sections
+  Eigen::Vector2f axis = Eigen::Vector2f::UnitX();   // unit, in the bin's XY plane
+  Eigen::Vector3f centre = Eigen::Vector3f::Zero();  // mid-point of the region along the axis line
+  int best_count = 0;                                // cross-sections of width 0.9R..1.0R at the best angle
+  float scan_deg = 0;                                // scan direction with most such sections
 };
 
 struct AxisBuffers {
@@ -26,7 +26,8 @@ struct AxisBuffers {
 int count_sections(const ZBuffer& zb, const int* cells, int count, float theta_rad, float min_w, float max_w,
                    AxisBuffers* buf);
 
-AxisEstimate estimate_axis(const ZBuffer& zb, const int* cells, int count, const Eigen::Vector3f& core_centroid,
-                           const LocateConfig& cfg, float tube_d_mm, AxisBuffers* buf);
+AxisEstimate estimate_axis(const ZBuffer& zb, const int* cells, int count,
+                           const Eigen::Vector3f& core_centroid, const LocateConfig& cfg, float tube_d_mm,
+                           AxisBuffers* buf);
 
 }  // namespace pipeloc

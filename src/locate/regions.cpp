@@ -26,8 +26,9 @@ void reserve_regions(RegionBuffers* rb, const ZBuffer& zb, const LocateConfig& c
 }
 
 float longest_distance(const ZBuffer& zb, const int* cells, int count) {
-  static const float dirs[13][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 1, 0}, {1, -1, 0}, {1, 0, 1}, {1, 0, -1},
-                                    {0, 1, 1}, {0, 1, -1}, {1, 1, 1}, {1, 1, -1}, {1, -1, 1}, {-1, 1, 1}};
+  static const float dirs[13][3] = {{1, 0, 0},  {0, 1, 0},  {0, 0, 1}, {1, 1, 0},  {1, -1, 0},
+                                    {1, 0, 1},  {1, 0, -1}, {0, 1, 1}, {0, 1, -1}, {1, 1, 1},
+                                    {1, 1, -1}, {1, -1, 1}, {-1, 1, 1}};
   int extreme[26];
   float best[26];
   for (int d = 0; d < 26; ++d) best[d] = -1e30f, extreme[d] = cells[0];
@@ -43,12 +44,14 @@ float longest_distance(const ZBuffer& zb, const int* cells, int count) {
   float longest = 0;
   for (int a = 0; a < 26; ++a)
     for (int b = a + 1; b < 26; ++b)
-      longest = std::max(longest, (zb.point(extreme[a] % w, extreme[a] / w) - zb.point(extreme[b] % w, extreme[b] / w)).norm());
+      longest = std::max(
+          longest,
+          (zb.point(extreme[a] % w, extreme[a] / w) - zb.point(extreme[b] % w, extreme[b] / w)).norm());
   return longest;
 }
 
-RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, const LocateConfig& cfg, float d,
-                                      float l, RegionBuffers* rb) {
+RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, const LocateConfig& cfg,
+                                      float d, float l, RegionBuffers* rb) {
   RegionStats stats;
   rb->candidates.clear();
   const int w = zb.z.width;
@@ -146,12 +149,14 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
         s = stamp;
         cells[count++] = zb.index(ni, nj);
         // Convex: beside the core the surface tilts away from it (plane-fit normals, not noisy heights).
-        if (head < core_count) ++ring_cells, ring_lower += nn.x() * float(kDi[k]) + nn.y() * float(kDj[k]) > 0;
+        if (head < core_count)
+          ++ring_cells, ring_lower += nn.x() * float(kDi[k]) + nn.y() * float(kDj[k]) > 0;
       }
       if (leaked) break;
     }
     if (leaked) continue;  // spread over far more than one pipe: not a pipe lying on others
-    // A pipe's top is convex: the cells grown straight from its core tilt away from it. A patch of floor between pipes grows up their sides instead.
+    // A pipe's top is convex: the cells grown straight from its core tilt away from it. A patch of floor
+    // between pipes grows up their sides instead.
     if (ring_cells == 0 || float(ring_lower) < float(cfg.convexity_min_share) * float(ring_cells)) continue;
     // 3. Keep regions longer than a * L.
     const float extent = longest_distance(zb, cells, count);

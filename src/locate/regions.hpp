@@ -10,33 +10,34 @@
 namespace pipeloc {
 
 struct CandidateRegion {
-  int core_begin = 0, core_end = 0;     // cells [begin, end) in RegionBuffers::core_cells
-  int cells_begin = 0, cells_end = 0;   // grown region in RegionBuffers::region_cells
+  int core_begin = 0, core_end = 0;    // cells [begin, end) in RegionBuffers::core_cells
+  int cells_begin = 0, cells_end = 0;  // grown region in RegionBuffers::region_cells
   Eigen::Vector3f core_centroid = Eigen::Vector3f::Zero();
   float core_area_mm2 = 0;
-  float extent_mm = 0;                  // l_max of the grown region
+  float extent_mm = 0;  // l_max of the grown region
 };
 
 // Fixed-size working memory, sized once for a Z-buffer and a model.
 struct RegionBuffers {
-  Image<int> core_label;          // -1 none, else core index (this frame)
-  Image<int> stamp;               // growth visit marks
+  Image<int> core_label;  // -1 none, else core index (this frame)
+  Image<int> stamp;       // growth visit marks
   int stamp_value = 0;
-  Image<float> ridge_z;           // growth: height of the core cell each grown cell came from
-  std::vector<int> queue;         // BFS
-  std::vector<int> core_cells;    // all kept cores' cells
-  std::vector<int> region_cells;  // all grown regions' cells
+  Image<float> ridge_z;                     // growth: height of the core cell each grown cell came from
+  std::vector<int> queue;                   // BFS
+  std::vector<int> core_cells;              // all kept cores' cells
+  std::vector<int> region_cells;            // all grown regions' cells
   std::vector<CandidateRegion> candidates;  // capacity max_candidates
   int max_region_cells = 0;
 };
 
 struct RegionStats {
-  int core_regions = 0;       // connected upward regions before the area test
-  int cores_kept = 0;         // after area and extent tests
-  int candidates = 0;         // grown regions longer than a * L
+  int core_regions = 0;  // connected upward regions before the area test
+  int cores_kept = 0;    // after area and extent tests
+  int candidates = 0;    // grown regions longer than a * L
 };
 
-void reserve_regions(RegionBuffers* rb, const ZBuffer& zb, const LocateConfig& cfg, float tube_d_mm, float extent_l_mm);
+void reserve_regions(RegionBuffers* rb, const ZBuffer& zb, const LocateConfig& cfg, float tube_d_mm,
+                     float extent_l_mm);
 
 // Fills rb->candidates, best first (largest core first).
 RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, const LocateConfig& cfg,

@@ -4,8 +4,8 @@
 
 namespace pipeloc {
 
-Verification verify_pose(const Mesh& mesh, const Pose& model_to_cam, const Image<float>& depth, const Intrinsics& k,
-                         float tol, Image<float>* scratch) {
+Verification verify_pose(const Mesh& mesh, const Pose& model_to_cam, const Image<float>& depth,
+                         const Intrinsics& k, float tol, Image<float>* scratch) {
   Verification v;
   const PixelBox box = render_depth_in_box(mesh, model_to_cam, k, scratch);
   for (int y = box.y0; y <= box.y1; ++y)

@@ -10,17 +10,17 @@
 namespace pipeloc {
 
 struct Verification {
-  int model_px = 0;      // pixels the model covers in the image, less its one-pixel rim
-  int agree_px = 0;      // measured depth within tolerance of the model
-  int free_space_px = 0; // measured farther: the sensor saw through where the model would be
-  int occluded_px = 0;   // measured nearer: something lies in front (another pipe, or the pose sank in)
+  int model_px = 0;       // pixels the model covers in the image, less its one-pixel rim
+  int agree_px = 0;       // measured depth within tolerance of the model
+  int free_space_px = 0;  // measured farther: the sensor saw through where the model would be
+  int occluded_px = 0;    // measured nearer: something lies in front (another pipe, or the pose sank in)
   float agreement() const { return model_px ? float(agree_px) / float(model_px) : 0.f; }
   float free_space() const { return model_px ? float(free_space_px) / float(model_px) : 1.f; }
   float occluded() const { return model_px ? float(occluded_px) / float(model_px) : 1.f; }
 };
 
 // scratch: camera-sized image whose contents are overwritten in the model's box.
-Verification verify_pose(const Mesh& mesh, const Pose& model_to_cam, const Image<float>& depth_mm, const Intrinsics& k,
-                         float tolerance_mm, Image<float>* scratch);
+Verification verify_pose(const Mesh& mesh, const Pose& model_to_cam, const Image<float>& depth_mm,
+                         const Intrinsics& k, float tolerance_mm, Image<float>* scratch);
 
 }  // namespace pipeloc

@@ -28,7 +28,9 @@ int build_zbuffer(const Image<float>& depth, const Intrinsics& k, const Pose& bi
     for (int u = 0; u < depth.width; ++u) {
       const float d = depth.at(u, v);
       if (!(d > 0)) continue;
-      const Eigen::Vector3f p = r * Eigen::Vector3f((u - float(k.cx)) * d / float(k.fx), (v - float(k.cy)) * d / float(k.fy), d) + t;
+      const Eigen::Vector3f p =
+          r * Eigen::Vector3f((u - float(k.cx)) * d / float(k.fx), (v - float(k.cy)) * d / float(k.fy), d) +
+          t;
       lo_x = std::min(lo_x, p.x()), hi_x = std::max(hi_x, p.x());
       lo_y = std::min(lo_y, p.y()), hi_y = std::max(hi_y, p.y());
       ++valid;
@@ -53,11 +55,15 @@ int build_zbuffer(const Image<float>& depth, const Intrinsics& k, const Pose& bi
     for (int u = 0; u < depth.width; ++u) {
       const float d = depth.at(u, v);
       if (!(d > 0)) continue;
-      const Eigen::Vector3f p = r * Eigen::Vector3f((u - float(k.cx)) * d / float(k.fx), (v - float(k.cy)) * d / float(k.fy), d) + t;
+      const Eigen::Vector3f p =
+          r * Eigen::Vector3f((u - float(k.cx)) * d / float(k.fx), (v - float(k.cy)) * d / float(k.fy), d) +
+          t;
       const float half = 0.5f * d / float(k.fx) * inv;  // footprint half-width in cells
       const float ci = (p.x() - float(zb->origin_x_mm)) * inv, cj = (p.y() - float(zb->origin_y_mm)) * inv;
-      const int i0 = std::max(0, int(std::lround(ci - half))), i1 = std::min(zb->width - 1, int(std::lround(ci + half)));
-      const int j0 = std::max(0, int(std::lround(cj - half))), j1 = std::min(zb->height - 1, int(std::lround(cj + half)));
+      const int i0 = std::max(0, int(std::lround(ci - half))),
+                i1 = std::min(zb->width - 1, int(std::lround(ci + half)));
+      const int j0 = std::max(0, int(std::lround(cj - half))),
+                j1 = std::min(zb->height - 1, int(std::lround(cj + half)));
       for (int j = j0; j <= j1; ++j)
         for (int i = i0; i <= i1; ++i) {
           float& cell = zb->z.at(i, j);

@@ -14,11 +14,13 @@ namespace pipeloc {
 struct ZBuffer {
   double origin_x_mm = 0, origin_y_mm = 0;  // centre of cell (0, 0)
   double pixel_mm = 1;
-  int width = 0, height = 0;                // cells in use (<= capacity of z)
-  Image<float> z;                           // height, NaN where nothing was seen
+  int width = 0, height = 0;  // cells in use (<= capacity of z)
+  Image<float> z;             // height, NaN where nothing was seen
 
   static constexpr float kEmpty = std::numeric_limits<float>::quiet_NaN();
-  bool valid(int i, int j) const { return i >= 0 && j >= 0 && i < width && j < height && !std::isnan(z.at(i, j)); }
+  bool valid(int i, int j) const {
+    return i >= 0 && j >= 0 && i < width && j < height && !std::isnan(z.at(i, j));
+  }
   Eigen::Vector3f point(int i, int j) const {
     return {float(origin_x_mm + i * pixel_mm), float(origin_y_mm + j * pixel_mm), z.at(i, j)};
   }

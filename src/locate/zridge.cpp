@@ -12,8 +12,9 @@ void reserve_ridge(RidgeBuffers* rb, float max_extent_mm, float cell_mm) {
   rb->top_p.assign(std::size_t(rb->cols) * rb->rows, Eigen::Vector3f::Zero());
 }
 
-int extract_zridge(const Eigen::Vector3f* pts, int count, const Eigen::Vector2f& axis, float cell, float min_run_mm,
-                   RidgeBuffers* rb, Eigen::Vector3f* out, int capacity, bool whole_surface) {
+int extract_zridge(const Eigen::Vector3f* pts, int count, const Eigen::Vector2f& axis, float cell,
+                   float min_run_mm, RidgeBuffers* rb, Eigen::Vector3f* out, int capacity,
+                   bool whole_surface) {
   if (count == 0) return 0;
   const Eigen::Vector2f across(-axis.y(), axis.x());
   float u0 = 1e30f, u1 = -1e30f, v0 = 1e30f, v1 = -1e30f;
@@ -55,7 +56,8 @@ int extract_zridge(const Eigen::Vector3f* pts, int count, const Eigen::Vector2f&
         if (zr[end] != kNone && zr[end] > zr[best]) best = end;
       }
       // Peaks at the edge of a run are slopes, not ridges.
-      if (end - c + 1 >= min_run && best != c && best != end) out[n++] = rb->top_p[std::size_t(r) * cols + best];
+      if (end - c + 1 >= min_run && best != c && best != end)
+        out[n++] = rb->top_p[std::size_t(r) * cols + best];
       c = end + 1;
     }
   }

@@ -9,9 +9,9 @@
 namespace pipeloc {
 
 struct RidgeBuffers {
-  int cols = 0, rows = 0;               // capacity of the axis-aligned grid
-  std::vector<float> top_z;             // per cell: highest z
-  std::vector<Eigen::Vector3f> top_p;   // per cell: that point
+  int cols = 0, rows = 0;              // capacity of the axis-aligned grid
+  std::vector<float> top_z;            // per cell: highest z
+  std::vector<Eigen::Vector3f> top_p;  // per cell: that point
 };
 
 void reserve_ridge(RidgeBuffers* rb, float max_extent_mm, float cell_mm);

@@ -18,8 +18,7 @@ double parse_number(const std::string& token, const std::string& text, std::size
   char* end = nullptr;
   const double value = std::strtod(begin, &end);
   if (end == begin || !std::isfinite(value))
-    throw ModelError("centreline token '" + token + "': expected a number at '" +
-                     std::string(begin) + "'");
+    throw ModelError("centreline token '" + token + "': expected a number at '" + std::string(begin) + "'");
   *pos += std::size_t(end - begin);
   return value;
 }
@@ -129,8 +128,8 @@ Mesh make_pipe(const PipeSpec& spec) {
       continue;
     }
     if (seg.radius_mm <= r)
-      throw ModelError("bend radius " + std::to_string(seg.radius_mm) +
-                       " mm must exceed the tube radius " + std::to_string(r) + " mm");
+      throw ModelError("bend radius " + std::to_string(seg.radius_mm) + " mm must exceed the tube radius " +
+                       std::to_string(r) + " mm");
     const Eigen::AngleAxisd twist(seg.twist_deg * kDegToRad, f.t);
     f.n = twist * f.n;
     f.b = twist * f.b;

@@ -11,10 +11,10 @@ namespace pipeloc {
 
 struct CentrelineSegment {
   enum Kind { straight, bend } kind = straight;
-  double length_mm = 0;     // straight
-  double angle_deg = 0;     // bend: turn angle (negative turns the other way)
-  double radius_mm = 0;     // bend: radius of the centreline arc
-  double twist_deg = 0;     // bend: rotation of the bend plane about the tangent first
+  double length_mm = 0;  // straight
+  double angle_deg = 0;  // bend: turn angle (negative turns the other way)
+  double radius_mm = 0;  // bend: radius of the centreline arc
+  double twist_deg = 0;  // bend: rotation of the bend plane about the tangent first
 };
 
 struct PipeSpec {

@@ -8,8 +8,7 @@ namespace pipeloc {
 
 Eigen::Vector3f Mesh::face_normal(std::size_t f) const {
   const auto& t = faces[f];
-  const Eigen::Vector3f n =
-      (vertices[t[1]] - vertices[t[0]]).cross(vertices[t[2]] - vertices[t[0]]);
+  const Eigen::Vector3f n = (vertices[t[1]] - vertices[t[0]]).cross(vertices[t[2]] - vertices[t[0]]);
   const float len = n.norm();
   return len > 0 ? Eigen::Vector3f(n / len) : Eigen::Vector3f::Zero();
 }
@@ -32,8 +31,7 @@ Mesh weld_vertices(const Mesh& soup, float tol_mm) {
   std::vector<int> remap(soup.vertices.size());
   for (std::size_t i = 0; i < soup.vertices.size(); ++i) {
     const auto& v = soup.vertices[i];
-    const Key key{std::lround(v.x() / tol_mm), std::lround(v.y() / tol_mm),
-                  std::lround(v.z() / tol_mm)};
+    const Key key{std::lround(v.x() / tol_mm), std::lround(v.y() / tol_mm), std::lround(v.z() / tol_mm)};
     auto [it, inserted] = index.emplace(key, int(out.vertices.size()));
     if (inserted) out.vertices.push_back(v);
     remap[i] = it->second;

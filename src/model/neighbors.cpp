@@ -17,8 +17,8 @@ void KdTree3::build(const Eigen::Vector3f* points, std::size_t count) {
   if (count == 0) return;  // FLANN cannot index an empty matrix
   // Eigen::Vector3f is three packed floats, so the buffer is a count x 3 row-major matrix.
   flann::Matrix<float> data(const_cast<float*>(points[0].data()), count, 3);
-  impl_->index = std::make_unique<flann::Index<flann::L2_Simple<float>>>(
-      data, flann::KDTreeSingleIndexParams(10));
+  impl_->index =
+      std::make_unique<flann::Index<flann::L2_Simple<float>>>(data, flann::KDTreeSingleIndexParams(10));
   impl_->index->buildIndex();
 }
 

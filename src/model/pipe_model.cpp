@@ -64,8 +64,7 @@ SurfaceSamples sample_surface(const Mesh& mesh, const std::vector<Eigen::Vector3
     if (u + v > 1) u = 1 - u, v = 1 - v;
     const auto& t = mesh.faces[f];
     const float w0 = float(1 - u - v), w1 = float(u), w2 = float(v);
-    out.points.push_back(w0 * mesh.vertices[t[0]] + w1 * mesh.vertices[t[1]] +
-                         w2 * mesh.vertices[t[2]]);
+    out.points.push_back(w0 * mesh.vertices[t[0]] + w1 * mesh.vertices[t[1]] + w2 * mesh.vertices[t[2]]);
     Eigen::Vector3f n = w0 * vn[t[0]] + w1 * vn[t[1]] + w2 * vn[t[2]];
     if (n.norm() < 1e-6f) n = mesh.face_normal(f);
     out.normals.push_back(n.normalized());
@@ -141,8 +140,10 @@ std::vector<Pose> find_symmetries(const SurfaceSamples& surface, const Eigen::Ve
         worst_plane = std::max(worst_plane, std::abs((q - surface.points[idx]).dot(surface.normals[idx])));
         if (d2 > 16 * tolerance_mm * tolerance_mm) fits = false;
       }
-      if (iter == 5) fits = fits && worst_plane <= tolerance_mm;
-      else if (fits) m = Eigen::umeyama(src, dst, false).cast<float>();
+      if (iter == 5)
+        fits = fits && worst_plane <= tolerance_mm;
+      else if (fits)
+        m = Eigen::umeyama(src, dst, false).cast<float>();
     }
     if (!fits) continue;
     Pose refined = Pose::Identity();
@@ -159,7 +160,8 @@ void orient_outward(Mesh* mesh) {
   double volume6 = 0;
   const Eigen::Vector3f ref = mesh->vertices[0];
   for (const auto& t : mesh->faces)
-    volume6 += double((mesh->vertices[t[0]] - ref).dot((mesh->vertices[t[1]] - ref).cross(mesh->vertices[t[2]] - ref)));
+    volume6 += double(
+        (mesh->vertices[t[0]] - ref).dot((mesh->vertices[t[1]] - ref).cross(mesh->vertices[t[2]] - ref)));
   if (volume6 < 0)
     for (auto& t : mesh->faces) std::swap(t[1], t[2]);
 }

@@ -19,11 +19,11 @@ struct PipeModel {
   std::string source;  // file or preset it came from
   Mesh mesh;
   std::vector<Eigen::Vector3f> vertex_normals;
-  SurfaceSamples surface;          // about one sample per mm^2
-  float tube_diameter_mm = 0;      // R of the paper
-  float extent_mm = 0;             // L of the paper: longest distance between two vertices
+  SurfaceSamples surface;      // about one sample per mm^2
+  float tube_diameter_mm = 0;  // R of the paper
+  float extent_mm = 0;         // L of the paper: longest distance between two vertices
   Eigen::Vector3f centroid = Eigen::Vector3f::Zero();  // of the surface
-  std::vector<Pose> symmetries;    // proper rotations other than identity mapping the surface onto itself
+  std::vector<Pose> symmetries;  // proper rotations other than identity mapping the surface onto itself
   float symmetry_tolerance_mm = 0;
 };
 
@@ -40,8 +40,8 @@ PipeModel derive_pipe_model(Mesh mesh, const std::string& source, const ModelDer
 PipeModel load_pipe_model(const std::string& stl_path, const ModelDerivation& = {});
 
 // Area-weighted surface samples with interpolated vertex normals, deterministic for a seed.
-SurfaceSamples sample_surface(const Mesh& mesh, const std::vector<Eigen::Vector3f>& vertex_normals,
-                              int count, unsigned seed);
+SurfaceSamples sample_surface(const Mesh& mesh, const std::vector<Eigen::Vector3f>& vertex_normals, int count,
+                              unsigned seed);
 std::vector<Eigen::Vector3f> compute_vertex_normals(const Mesh& mesh);
 // Flips the winding if the surface encloses negative volume, so face normals point outward.
 void orient_outward(Mesh* mesh);

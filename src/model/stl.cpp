@@ -23,8 +23,8 @@ Mesh parse_binary(const std::string& path, const std::string& bytes) {
   const std::size_t expected = kHeaderBytes + 4 + std::size_t(count) * kTriangleBytes;
   if (bytes.size() < expected)
     fail(path, "truncated: header announces " + std::to_string(count) + " triangles (" +
-                   std::to_string(expected) + " bytes) but the file has " +
-                   std::to_string(bytes.size()) + " bytes");
+                   std::to_string(expected) + " bytes) but the file has " + std::to_string(bytes.size()) +
+                   " bytes");
   if (count == 0) fail(path, "holds no triangles");
   Mesh soup;
   soup.vertices.reserve(std::size_t(count) * 3);
@@ -61,8 +61,8 @@ Mesh parse_ascii(const std::string& path, const std::string& text) {
       ++line_vertices;
     } else if (word == "endfacet") {
       if (line_vertices != 3)
-        fail(path, "facet " + std::to_string(soup.faces.size()) + " has " +
-                       std::to_string(line_vertices) + " vertices, expected 3");
+        fail(path, "facet " + std::to_string(soup.faces.size()) + " has " + std::to_string(line_vertices) +
+                       " vertices, expected 3");
       const int b = int(soup.vertices.size()) - 3;
       soup.faces.push_back({b, b + 1, b + 2});
       line_vertices = 0;
@@ -89,11 +89,10 @@ Mesh read_stl(const std::string& path) {
     std::memcpy(&count, bytes.data() + kHeaderBytes, 4);
     binary_size_matches = bytes.size() == kHeaderBytes + 4 + std::size_t(count) * kTriangleBytes;
   }
-  const bool looks_ascii = bytes.compare(0, 5, "solid") == 0 &&
-                           bytes.find("facet", 5) != std::string::npos;
+  const bool looks_ascii = bytes.compare(0, 5, "solid") == 0 && bytes.find("facet", 5) != std::string::npos;
   Mesh soup;
-  if (binary_size_matches || (!looks_ascii && bytes.size() >= kHeaderBytes + 4 &&
-                              bytes.compare(0, 5, "solid") != 0)) {
+  if (binary_size_matches ||
+      (!looks_ascii && bytes.size() >= kHeaderBytes + 4 && bytes.compare(0, 5, "solid") != 0)) {
     soup = parse_binary(path, bytes);
   } else if (looks_ascii) {
     soup = parse_ascii(path, bytes);

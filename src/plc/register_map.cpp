@@ -28,7 +28,8 @@ void write_result_block(const Result& r, const Encoding& enc, std::uint16_t* map
     put(valid ? r.pose->rxyz_deg[std::size_t(i)] : nan, 1000.0, enc, &map[kPose + 6 + 2 * i]);
   }
   put(valid ? r.score : nan, 10000.0, enc, &map[kScore]);
-  for (int i = 0; i < 4; ++i) put(valid ? r.pose->wxyz[std::size_t(i)] : nan, 10000.0, enc, &map[kQuat + 2 * i]);
+  for (int i = 0; i < 4; ++i)
+    put(valid ? r.pose->wxyz[std::size_t(i)] : nan, 10000.0, enc, &map[kQuat + 2 * i]);
 }
 
 }  // namespace pipeloc::reg

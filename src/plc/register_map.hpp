@@ -10,17 +10,22 @@
 
 namespace pipeloc::reg {
 
-constexpr int kCmd = 0, kReqId = 1;                       // written by the PLC
+constexpr int kCmd = 0, kReqId = 1;  // written by the PLC
 constexpr int kStatus = 10, kAckId = 11, kError = 12, kHeartbeat = 13, kCount = 14, kIndex = 15,
               kCycleMs = 16, kFrameAgeMs = 17, kCycles = 18;  // u32 at 18-19
-constexpr int kPose = 20;                                  // X Y Z RX RY RZ, 2 registers each
-constexpr int kScore = 32, kQuat = 34;                     // QW QX QY QZ
+constexpr int kPose = 20;                                     // X Y Z RX RY RZ, 2 registers each
+constexpr int kScore = 32, kQuat = 34;                        // QW QX QY QZ
 constexpr int kSize = 42;
 
 enum class Command : std::uint16_t { locate = 1, next = 2, clear_error = 3 };
 enum class Status : std::uint16_t { ready = 0, busy = 1, done_ok = 2, done_none = 3, error = 4 };
 enum class Error : std::uint16_t {
-  none = 0, sensor_unavailable = 1, frame_invalid = 2, budget_exhausted = 3, config_model = 4, bad_command = 5,
+  none = 0,
+  sensor_unavailable = 1,
+  frame_invalid = 2,
+  budget_exhausted = 3,
+  config_model = 4,
+  bad_command = 5,
   no_further_result = 6
 };
 

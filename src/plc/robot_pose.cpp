@@ -43,12 +43,13 @@ std::array<double, 3> euler_deg(const Eigen::Matrix3d& r, EulerConvention c) {
 }
 
 Eigen::Matrix3d rotation_from_euler_deg(const std::array<double, 3>& e, EulerConvention c) {
-  const Eigen::AngleAxisd rx(e[0] / kDeg, Eigen::Vector3d::UnitX()), ry(e[1] / kDeg, Eigen::Vector3d::UnitY()),
-      rz(e[2] / kDeg, Eigen::Vector3d::UnitZ());
+  const Eigen::AngleAxisd rx(e[0] / kDeg, Eigen::Vector3d::UnitX()),
+      ry(e[1] / kDeg, Eigen::Vector3d::UnitY()), rz(e[2] / kDeg, Eigen::Vector3d::UnitZ());
   return c == EulerConvention::zyx ? (rz * ry * rx).toRotationMatrix() : (rx * ry * rz).toRotationMatrix();
 }
 
-RobotPose to_robot(const Pose& model_to_cam, const Pose& robot_from_camera, const Pose& grasp, EulerConvention c) {
+RobotPose to_robot(const Pose& model_to_cam, const Pose& robot_from_camera, const Pose& grasp,
+                   EulerConvention c) {
   const Pose p = robot_from_camera * model_to_cam * grasp;
   RobotPose out;
   out.xyz_mm = {p.translation().x(), p.translation().y(), p.translation().z()};

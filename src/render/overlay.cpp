@@ -53,7 +53,8 @@ void draw_dot(Image<Rgb>* img, double x, double y, int radius, Rgb color) {
   const int cx = int(std::lround(x)), cy = int(std::lround(y));
   for (int dy = -radius; dy <= radius; ++dy)
     for (int dx = -radius; dx <= radius; ++dx)
-      if (dx * dx + dy * dy <= radius * radius && img->inside(cx + dx, cy + dy)) img->at(cx + dx, cy + dy) = color;
+      if (dx * dx + dy * dy <= radius * radius && img->inside(cx + dx, cy + dy))
+        img->at(cx + dx, cy + dy) = color;
 }
 
 void draw_line(Image<Rgb>* img, double x0, double y0, double x1, double y1, Rgb color, int thickness) {

@@ -12,8 +12,8 @@ double edge(const Eigen::Vector2d& a, const Eigen::Vector2d& b, double x, double
 
 // Visits the integer pixel centres inside the screen triangle s0 s1 s2 (either winding).
 template <typename Visit>
-void scan_triangle(const Eigen::Vector2d& s0, const Eigen::Vector2d& s1, const Eigen::Vector2d& s2,
-                   int width, int height, Visit visit) {
+void scan_triangle(const Eigen::Vector2d& s0, const Eigen::Vector2d& s1, const Eigen::Vector2d& s2, int width,
+                   int height, Visit visit) {
   const double area = edge(s0, s1, s2.x(), s2.y());
   if (std::abs(area) < 1e-12) return;
   const double sign = area > 0 ? 1.0 : -1.0;
@@ -23,8 +23,7 @@ void scan_triangle(const Eigen::Vector2d& s0, const Eigen::Vector2d& s1, const E
   const int y1 = std::min(height - 1, int(std::floor(std::max({s0.y(), s1.y(), s2.y()}))));
   for (int y = y0; y <= y1; ++y)
     for (int x = x0; x <= x1; ++x)
-      if (sign * edge(s1, s2, x, y) >= 0 && sign * edge(s2, s0, x, y) >= 0 &&
-          sign * edge(s0, s1, x, y) >= 0)
+      if (sign * edge(s1, s2, x, y) >= 0 && sign * edge(s2, s0, x, y) >= 0 && sign * edge(s0, s1, x, y) >= 0)
         visit(x, y);
 }
 
@@ -83,7 +82,8 @@ void render_perspective(const Mesh& mesh, const Pose& model_to_cam, const Intrin
                    });
 }
 
-PixelBox render_depth_in_box(const Mesh& mesh, const Pose& model_to_cam, const Intrinsics& k, Image<float>* z_mm) {
+PixelBox render_depth_in_box(const Mesh& mesh, const Pose& model_to_cam, const Intrinsics& k,
+                             Image<float>* z_mm) {
   PixelBox box;
   double lo_x = 1e30, lo_y = 1e30, hi_x = -1e30, hi_y = -1e30;
   for (const auto& v : mesh.vertices) {
@@ -124,9 +124,8 @@ void render_height(const Mesh& mesh, const Pose& model_to_world, Envelope which,
     const Eigen::Vector3d n = (p1 - p0).cross(p2 - p0);
     if (std::abs(n.z()) < 1e-12) continue;  // vertical faces add nothing to a height map
     const double plane = n.dot(p0);
-    scan_triangle(map->to_cell(p0.x(), p0.y()), map->to_cell(p1.x(), p1.y()),
-                  map->to_cell(p2.x(), p2.y()), map->z_mm.width, map->z_mm.height,
-                  [&](int i, int j) {
+    scan_triangle(map->to_cell(p0.x(), p0.y()), map->to_cell(p1.x(), p1.y()), map->to_cell(p2.x(), p2.y()),
+                  map->z_mm.width, map->z_mm.height, [&](int i, int j) {
                     const double x = map->origin_x_mm + i * map->cell_mm;
                     const double y = map->origin_y_mm + j * map->cell_mm;
                     const float z = float((plane - n.x() * x - n.y() * y) / n.z());

@@ -9,9 +9,9 @@
 namespace pipeloc {
 
 struct DepthTarget {
-  Image<float> z_mm;               // along the optical axis; 0 where nothing was drawn
-  Image<int> label;                // -1 where nothing was drawn
-  Image<Eigen::Vector3f> normal;   // unit face normal in camera frame (towards the camera)
+  Image<float> z_mm;              // along the optical axis; 0 where nothing was drawn
+  Image<int> label;               // -1 where nothing was drawn
+  Image<Eigen::Vector3f> normal;  // unit face normal in camera frame (towards the camera)
 
   void reset(int width, int height);
 };
@@ -27,7 +27,8 @@ struct PixelBox {
 
 // Depth of the mesh alone, drawn into the part of z_mm it covers (cleared first); the rest of
 // z_mm is untouched. Returns that box (empty if the mesh is off-screen or behind the camera).
-PixelBox render_depth_in_box(const Mesh& mesh, const Pose& model_to_cam, const Intrinsics& k, Image<float>* z_mm);
+PixelBox render_depth_in_box(const Mesh& mesh, const Pose& model_to_cam, const Intrinsics& k,
+                             Image<float>* z_mm);
 
 // A height map over the world XY plane: cell (i, j) has centre (origin + i*cell, origin + j*cell).
 struct HeightMap {

@@ -20,8 +20,9 @@ void draw_outline(Image<Rgb>* img, const Mesh& mesh, const Pose& model_to_cam, c
   for (int y = box.y0; y <= box.y1; ++y)
     for (int x = box.x0; x <= box.x1; ++x) {
       if (scratch->at(x, y) <= 0) continue;
-      const bool edge = x == box.x0 || y == box.y0 || x == box.x1 || y == box.y1 || scratch->at(x - 1, y) <= 0 ||
-                        scratch->at(x + 1, y) <= 0 || scratch->at(x, y - 1) <= 0 || scratch->at(x, y + 1) <= 0;
+      const bool edge = x == box.x0 || y == box.y0 || x == box.x1 || y == box.y1 ||
+                        scratch->at(x - 1, y) <= 0 || scratch->at(x + 1, y) <= 0 ||
+                        scratch->at(x, y - 1) <= 0 || scratch->at(x, y + 1) <= 0;
       if (edge) draw_dot(img, x, y, thickness / 2, color);
     }
 }
@@ -57,7 +58,10 @@ Image<Rgb> draw_locate_overlay(const Locator& loc, const Image<float>& depth, co
   const int pick = out.pick();
   for (int i = int(out.estimates.size()) - 1; i >= 0; --i) {
     const PipeEstimate& e = out.estimates[std::size_t(i)];
-    draw_outline(&img, mesh, e.model_to_cam, cam.intrinsics, i == pick ? kPick : e.pickable ? kOutline : kOther,
+    draw_outline(&img, mesh, e.model_to_cam, cam.intrinsics,
+                 i == pick    ? kPick
+                 : e.pickable ? kOutline
+                              : kOther,
                  i == pick ? 3 : 1, &scratch);
   }
   for (std::size_t c = 0; c < out.traces.size(); ++c) {

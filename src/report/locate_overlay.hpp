@@ -9,6 +9,7 @@ namespace pipeloc {
 // Depth shaded in grey; candidate regions purple with blue cores; estimated axes orange;
 // Z-ridges green; the model's outline at each accepted pose (yellow; grey if not pickable);
 // the pick in red with a cross at its centre.
-Image<Rgb> draw_locate_overlay(const Locator& locator, const Image<float>& depth_mm, const CameraInfo& camera);
+Image<Rgb> draw_locate_overlay(const Locator& locator, const Image<float>& depth_mm,
+                               const CameraInfo& camera);
 
 }  // namespace pipeloc

@@ -6,7 +6,8 @@
 namespace pipeloc {
 namespace {
 
-double max_distance(const std::vector<Eigen::Vector3d>& vertices, const Eigen::Matrix4d& diff, double stop_sq) {
+double max_distance(const std::vector<Eigen::Vector3d>& vertices, const Eigen::Matrix4d& diff,
+                    double stop_sq) {
   // diff = T_est^-1-free form: |A v + b| where A = R_est - R_true S, b = t_est - t_true S.
   const Eigen::Matrix3d a = diff.topLeftCorner<3, 3>();
   const Eigen::Vector3d b = diff.topRightCorner<3, 1>();

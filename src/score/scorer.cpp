@@ -32,7 +32,8 @@ struct ObjectData {
 // Greedy matching of DESIGN.md: estimates by descending score, each to the unmatched true pose
 // with the least error, if that error is within the bound. Returns the true pose matched to
 // each estimate (-1 for none).
-std::vector<int> greedy_match(const std::vector<std::vector<double>>& error, std::size_t truths, double bound) {
+std::vector<int> greedy_match(const std::vector<std::vector<double>>& error, std::size_t truths,
+                              double bound) {
   std::vector<int> match(error.size(), -1);
   std::vector<bool> taken(truths, false);
   for (std::size_t e = 0; e < error.size(); ++e) {
@@ -46,8 +47,12 @@ std::vector<int> greedy_match(const std::vector<std::vector<double>>& error, std
 
 }  // namespace
 
-double ScoreCounts::top_recall(int bound) const { return ratio(bound == 5 ? top_matched_5 : top_matched_10, top_pipes); }
-double ScoreCounts::best_correct(int bound) const { return ratio(bound == 5 ? best_correct_5 : best_correct_10, images); }
+double ScoreCounts::top_recall(int bound) const {
+  return ratio(bound == 5 ? top_matched_5 : top_matched_10, top_pipes);
+}
+double ScoreCounts::best_correct(int bound) const {
+  return ratio(bound == 5 ? best_correct_5 : best_correct_10, images);
+}
 double ScoreCounts::precision_10() const { return ratio(matched_10, estimates); }
 double ScoreCounts::time_median_s() const { return percentile(times_s, 0.5); }
 double ScoreCounts::time_p95_s() const { return percentile(times_s, 0.95); }
@@ -108,7 +113,8 @@ ScoreReport score_results(const std::string& dataset, const ResultsFile& results
     std::vector<const ResultRow*> est;
     if (auto it = rows.find({t.scene_id, t.im_id, t.obj_id}); it != rows.end()) est = it->second;
     rows_used += int(est.size());
-    std::stable_sort(est.begin(), est.end(), [](const ResultRow* a, const ResultRow* b) { return a->score > b->score; });
+    std::stable_sort(est.begin(), est.end(),
+                     [](const ResultRow* a, const ResultRow* b) { return a->score > b->score; });
 
     ScoreCounts c;
     c.images = 1;
@@ -119,7 +125,8 @@ ScoreReport score_results(const std::string& dataset, const ResultsFile& results
     std::vector<std::vector<double>> error(est.size(), std::vector<double>(gt.size()));
     for (std::size_t e = 0; e < est.size(); ++e)
       for (std::size_t g = 0; g < gt.size(); ++g)
-        error[e][g] = mssd(obj.vertices, est[e]->model_to_cam, gt[g]->model_to_cam, obj.symmetries, kBoundsMm[1]);
+        error[e][g] =
+            mssd(obj.vertices, est[e]->model_to_cam, gt[g]->model_to_cam, obj.symmetries, kBoundsMm[1]);
 
     for (double bound : kBoundsMm) {
       const auto match = greedy_match(error, gt.size(), bound);
@@ -129,7 +136,8 @@ ScoreReport score_results(const std::string& dataset, const ResultsFile& results
         ++matched;
         top += info[match[e]]->top ? 1 : 0;
       }
-      const bool best_ok = !match.empty() && match[0] >= 0 && info[match[0]]->occ_by_pipes <= params.top_occlusion_max;
+      const bool best_ok =
+          !match.empty() && match[0] >= 0 && info[match[0]]->occ_by_pipes <= params.top_occlusion_max;
       if (bound == kBoundsMm[0]) {
         c.top_matched_5 = top;
         c.best_correct_5 = best_ok;
@@ -150,12 +158,14 @@ std::string format_report(const ScoreReport& r) {
   std::ostringstream out;
   char line[256];
   std::snprintf(line, sizeof line, "%-18s %6s %5s %9s %10s %7s %8s %8s %5s %10s %10s\n", "object", "images",
-                "top", "recall@5", "recall@10", "best@5", "best@10", "prec@10", "est", "t_med_ms", "t_p95_ms");
+                "top", "recall@5", "recall@10", "best@5", "best@10", "prec@10", "est", "t_med_ms",
+                "t_p95_ms");
   out << line;
   auto row = [&](const std::string& name, const ScoreCounts& c) {
     std::snprintf(line, sizeof line, "%-18s %6d %5d %9.3f %10.3f %7.3f %8.3f %8.3f %5d %10.1f %10.1f\n",
                   name.c_str(), c.images, c.top_pipes, c.top_recall(5), c.top_recall(10), c.best_correct(5),
-                  c.best_correct(10), c.precision_10(), c.estimates, c.time_median_s() * 1e3, c.time_p95_s() * 1e3);
+                  c.best_correct(10), c.precision_10(), c.estimates, c.time_median_s() * 1e3,
+                  c.time_p95_s() * 1e3);
     out << line;
   };
   for (const auto& [id, c] : r.per_object) {
@@ -163,7 +173,8 @@ std::string format_report(const ScoreReport& r) {
     row(std::to_string(id) + (name.empty() ? "" : " " + name), c);
   }
   row("all", r.overall);
-  out << "malformed rows: " << r.malformed_rows << ", rows for images not in the targets: " << r.rows_outside_targets << '\n';
+  out << "malformed rows: " << r.malformed_rows
+      << ", rows for images not in the targets: " << r.rows_outside_targets << '\n';
   for (const auto& e : r.malformed_examples) out << "  " << e << '\n';
   return out.str();
 }
@@ -171,14 +182,21 @@ std::string format_report(const ScoreReport& r) {
 Json report_to_json(const ScoreReport& r) {
   auto counts = [](const ScoreCounts& c) {
     auto num = [](double v) { return std::isnan(v) ? Json(nullptr) : Json(v); };
-    return Json{{"images", c.images}, {"top_pipes", c.top_pipes},
-                {"top_recall_5mm", num(c.top_recall(5))}, {"top_recall_10mm", num(c.top_recall(10))},
-                {"best_correct_5mm", num(c.best_correct(5))}, {"best_correct_10mm", num(c.best_correct(10))},
-                {"precision_10mm", num(c.precision_10())}, {"estimates", c.estimates},
-                {"time_median_s", num(c.time_median_s())}, {"time_p95_s", num(c.time_p95_s())}};
+    return Json{{"images", c.images},
+                {"top_pipes", c.top_pipes},
+                {"top_recall_5mm", num(c.top_recall(5))},
+                {"top_recall_10mm", num(c.top_recall(10))},
+                {"best_correct_5mm", num(c.best_correct(5))},
+                {"best_correct_10mm", num(c.best_correct(10))},
+                {"precision_10mm", num(c.precision_10())},
+                {"estimates", c.estimates},
+                {"time_median_s", num(c.time_median_s())},
+                {"time_p95_s", num(c.time_p95_s())}};
   };
-  Json j = {{"overall", counts(r.overall)}, {"malformed_rows", r.malformed_rows},
-            {"rows_outside_targets", r.rows_outside_targets}, {"per_object", Json::object()}};
+  Json j = {{"overall", counts(r.overall)},
+            {"malformed_rows", r.malformed_rows},
+            {"rows_outside_targets", r.rows_outside_targets},
+            {"per_object", Json::object()}};
   for (const auto& [id, c] : r.per_object) j["per_object"][std::to_string(id)] = counts(c);
   return j;
 }

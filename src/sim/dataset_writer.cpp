@@ -23,8 +23,12 @@ Json model_info_json(const PipeModel& model, const std::string& name) {
   return {{"name", name},
           {"tube_diameter", model.tube_diameter_mm},
           {"diameter", model.extent_mm},
-          {"min_x", lo.x()}, {"min_y", lo.y()}, {"min_z", lo.z()},
-          {"size_x", hi.x() - lo.x()}, {"size_y", hi.y() - lo.y()}, {"size_z", hi.z() - lo.z()},
+          {"min_x", lo.x()},
+          {"min_y", lo.y()},
+          {"min_z", lo.z()},
+          {"size_x", hi.x() - lo.x()},
+          {"size_y", hi.y() - lo.y()},
+          {"size_z", hi.z() - lo.z()},
           {"symmetries_discrete", symmetries}};
 }
 
@@ -37,14 +41,16 @@ void write_simulated_dataset(const PipeModel& model, const SimulateRequest& req)
   if (ec) throw IoError("cannot create '" + req.out_dir + "': " + ec.message());
 
   write_stl(model_path(req.out_dir, req.obj_id), model.mesh);
-  Json models_info = {{std::to_string(req.obj_id), model_info_json(model, fs::path(model.source).stem().string())}};
+  Json models_info = {
+      {std::to_string(req.obj_id), model_info_json(model, fs::path(model.source).stem().string())}};
   write_json(req.out_dir + "/models/models_info.json", models_info);
 
   std::mt19937 rng(req.seed);
   Json cameras = Json::object(), gts = Json::object(), infos = Json::object(), targets = Json::array();
   for (int im = 0; im < req.images; ++im) {
     const SimulatedScene s = simulate_scene(model, req.scene, rng);
-    write_depth_png(depth_path(req.out_dir, req.scene_id, im), to_raw_depth(s.depth_mm, s.camera.depth_scale));
+    write_depth_png(depth_path(req.out_dir, req.scene_id, im),
+                    to_raw_depth(s.depth_mm, s.camera.depth_scale));
     if (req.previews) {
       char name[32];
       std::snprintf(name, sizeof name, "/preview_%06d.png", im);
@@ -58,7 +64,9 @@ void write_simulated_dataset(const PipeModel& model, const SimulateRequest& req)
       gts[key].push_back(pose_to_gt_json(req.obj_id, s.model_to_cam(i)));
       infos[key].push_back(gt_info_to_json(s.info[i]));
     }
-    targets.push_back({{"scene_id", req.scene_id}, {"im_id", im}, {"obj_id", req.obj_id},
+    targets.push_back({{"scene_id", req.scene_id},
+                       {"im_id", im},
+                       {"obj_id", req.obj_id},
                        {"inst_count", int(s.model_to_world.size())}});
   }
   write_json(scene + "/scene_camera.json", cameras);

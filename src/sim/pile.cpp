@@ -54,7 +54,8 @@ Mesh make_bin_mesh(const BinSpec& bin) {
     const int b = int(mesh.vertices.size());
     for (int i = 0; i < 8; ++i)
       mesh.vertices.emplace_back(i & 1 ? hi.x() : lo.x(), i & 2 ? hi.y() : lo.y(), i & 4 ? hi.z() : lo.z());
-    const int quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+    const int quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                             {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
     for (const auto& q : quads) {
       mesh.faces.push_back({b + q[0], b + q[1], b + q[2]});
       mesh.faces.push_back({b + q[0], b + q[2], b + q[3]});
@@ -62,8 +63,8 @@ Mesh make_bin_mesh(const BinSpec& bin) {
   };
   const float hx = float(bin.inner_x_mm / 2), hy = float(bin.inner_y_mm / 2);
   const float t = float(bin.wall_thickness_mm), h = float(bin.wall_height_mm);
-  box({-hx - t, -hy - t, -t}, {hx + t, hy + t, 0});      // floor, top face at z = 0
-  box({-hx - t, -hy - t, 0}, {-hx, hy + t, h});          // walls
+  box({-hx - t, -hy - t, -t}, {hx + t, hy + t, 0});  // floor, top face at z = 0
+  box({-hx - t, -hy - t, 0}, {-hx, hy + t, h});      // walls
   box({hx, -hy - t, 0}, {hx + t, hy + t, h});
   box({-hx, -hy - t, 0}, {hx, -hy, h});
   box({-hx, hy, 0}, {hx, hy + t, h});
@@ -81,7 +82,8 @@ std::vector<Pose> build_pile(const PipeModel& model, const PileParams& params, s
   // Contact points: about one per 4 mm^2 is finer than the height map.
   std::vector<Eigen::Vector3f> contact;
   const std::size_t stride = std::max<std::size_t>(1, model.surface.points.size() / 6000);
-  for (std::size_t i = 0; i < model.surface.points.size(); i += stride) contact.push_back(model.surface.points[i]);
+  for (std::size_t i = 0; i < model.surface.points.size(); i += stride)
+    contact.push_back(model.surface.points[i]);
   const Dropper dropper{contact, map, params.bin.inner_x_mm / 2 - 1, params.bin.inner_y_mm / 2 - 1};
 
   const Eigen::Matrix3d lying = lying_rotation(model);
@@ -90,9 +92,9 @@ std::vector<Pose> build_pile(const PipeModel& model, const PileParams& params, s
   std::vector<Pose> poses;
   for (int n = 0, attempts = 0; n < params.pipes && attempts < params.pipes * 20; ++attempts) {
     Pose pose = Pose::Identity();
-    const Eigen::Matrix3d flip =
-        uniform(rng) < 0.5 ? Eigen::Matrix3d::Identity()
-                           : Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX()).toRotationMatrix();
+    const Eigen::Matrix3d flip = uniform(rng) < 0.5
+                                     ? Eigen::Matrix3d::Identity()
+                                     : Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX()).toRotationMatrix();
     const double yaw = uniform(rng) * 2 * M_PI;
     // A random initial lean so that pipes do not all start parallel to the floor.
     const double lean_dir = uniform(rng) * 2 * M_PI;

@@ -10,13 +10,15 @@ constexpr double kDeg = M_PI / 180.0;
 // Camera above the bin looking down at its centre, tilted by `tilt_deg` towards `azimuth`.
 Pose draw_camera(const SceneParams& p, std::mt19937& rng) {
   std::uniform_real_distribution<double> uniform(0.0, 1.0);
-  const double height = p.camera_height_min_mm + uniform(rng) * (p.camera_height_max_mm - p.camera_height_min_mm);
+  const double height =
+      p.camera_height_min_mm + uniform(rng) * (p.camera_height_max_mm - p.camera_height_min_mm);
   const double tilt = uniform(rng) * p.max_tilt_deg * kDeg;
   const double azimuth = uniform(rng) * 2 * M_PI;
   const Eigen::Vector3d look_at((uniform(rng) - 0.5) * 2 * p.camera_offset_mm,
                                 (uniform(rng) - 0.5) * 2 * p.camera_offset_mm, 0);
   // Camera axes in the world: z looks down (tilted), x along world x as far as possible.
-  const Eigen::Vector3d down(std::sin(tilt) * std::cos(azimuth), std::sin(tilt) * std::sin(azimuth), -std::cos(tilt));
+  const Eigen::Vector3d down(std::sin(tilt) * std::cos(azimuth), std::sin(tilt) * std::sin(azimuth),
+                             -std::cos(tilt));
   const Eigen::Vector3d centre = look_at - down * (height / std::cos(tilt));
   Eigen::Vector3d x_axis = Eigen::Vector3d::UnitX() - down * down.x();
   x_axis.normalize();

@@ -15,16 +15,16 @@ struct SceneParams {
   SensorModel sensor;
   Intrinsics intrinsics;
   double camera_height_min_mm = 980, camera_height_max_mm = 1080;  // above the bin floor
-  double max_tilt_deg = 0;           // camera tilt from vertical, drawn in [0, max]
-  double camera_offset_mm = 25;      // camera drawn this far off the bin centre at most
+  double max_tilt_deg = 0;       // camera tilt from vertical, drawn in [0, max]
+  double camera_offset_mm = 25;  // camera drawn this far off the bin centre at most
 };
 
 struct SimulatedScene {
-  CameraInfo camera;                  // world_to_cam always set
-  std::vector<Pose> model_to_world;   // one per pipe
-  Image<float> depth_mm;              // what the sensor reports (0 = no reading)
-  DepthTarget clean;                  // noise-free render: depth, label, normal
-  std::vector<GtInfo> info;           // one per pipe
+  CameraInfo camera;                 // world_to_cam always set
+  std::vector<Pose> model_to_world;  // one per pipe
+  Image<float> depth_mm;             // what the sensor reports (0 = no reading)
+  DepthTarget clean;                 // noise-free render: depth, label, normal
+  std::vector<GtInfo> info;          // one per pipe
 
   Pose model_to_cam(std::size_t i) const { return *camera.world_to_cam * model_to_world[i]; }
 };

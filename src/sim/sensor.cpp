@@ -68,7 +68,8 @@ Image<float> apply_sensor_model(const DepthTarget& cam, const DepthTarget& proj,
       const int r = 1 + int(uniform(rng) * m.specular_max_radius_px);
       for (int dy = -r; dy <= r; ++dy)
         for (int dx = -r; dx <= r; ++dx)
-          if (dx * dx + dy * dy <= r * r && out.inside(x + dx, y + dy) && cam.label.at(x + dx, y + dy) == label)
+          if (dx * dx + dy * dy <= r * r && out.inside(x + dx, y + dy) &&
+              cam.label.at(x + dx, y + dy) == label)
             out.at(x + dx, y + dy) = 0;
     }
   }

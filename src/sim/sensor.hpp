@@ -10,11 +10,11 @@
 namespace pipeloc {
 
 struct SensorModel {
-  double baseline_mm = 75;           // projector beside the camera along +x
-  double disparity_step_px = 0.125;  // 1/8 px: depth steps of z^2 / (8 f b)
+  double baseline_mm = 75;                                      // projector beside the camera along +x
+  double disparity_step_px = 0.125;                             // 1/8 px: depth steps of z^2 / (8 f b)
   double sigma_a_mm = 1.2, sigma_b_mm = 1.9, sigma_z0_m = 0.4;  // axial: a + b (z - z0)^2
   double lateral_sigma_px = 0.8;
-  double noisy_incidence_deg = 60;   // axial noise grows beyond this
+  double noisy_incidence_deg = 60;                    // axial noise grows beyond this
   double grazing_min_deg = 70, grazing_max_deg = 80;  // no return past a threshold in this range
   double shadow_tolerance_mm = 3;
   double specular_max_incidence_deg = 12;  // ridge pixels facing the camera can glint
@@ -35,9 +35,8 @@ struct SensorModel {
 // Turns a clean render (camera view) into what the sensor reports, in mm (0 = no reading).
 // `projector` is the same scene rendered from the projector's position (camera + baseline x).
 // Pipe pixels are those with a label in [0, pipe_labels).
-Image<float> apply_sensor_model(const DepthTarget& camera, const DepthTarget& projector,
-                                const Intrinsics& k, const SensorModel& model, int pipe_labels,
-                                std::mt19937& rng);
+Image<float> apply_sensor_model(const DepthTarget& camera, const DepthTarget& projector, const Intrinsics& k,
+                                const SensorModel& model, int pipe_labels, std::mt19937& rng);
 
 // Depth in mm to raw 16-bit PNG units.
 Image<std::uint16_t> to_raw_depth(const Image<float>& depth_mm, double depth_scale);
