@@ -14,8 +14,8 @@ struct LocateConfig {
   double normal_min_valid_share = 0.4;  // of the window's cells; fewer and the cell has no normal
 
   // II-B, Algorithm 1: candidate regions.
-  double upward_normal_max_deg = 25;  // core cells: N . Nv > cos(this)   (N_th1)
-  double continuity_max_deg = 25;     // growth: N_i . N_j > cos(this)
+  double upward_normal_max_deg = 45;  // core cells: N . Nv > cos(this) (N_th1); pipes resting on others tilt this far
+  double continuity_max_deg = 35;     // growth: N_i . N_j > cos(this); 3 sigma of two 7 mm plane fits plus the turn per cell
   double continuity_step_max_mm =
       8;  // growth: no jump between neighbours (3 sigma of the difference of two noisy cells at 1.1 m)
   double core_min_area_of_d2 = 0.75;    // A_th = this * D^2
