@@ -143,12 +143,16 @@ TEST(RidgeIcp, ConvergesFromThePapersRanges) {
   }
 }
 
+SimulatedScene pile_of(const PipeModel& model, int pipes, unsigned seed) {
+  std::mt19937 rng(seed);
+  SceneParams p;
+  p.pile.pipes = pipes;
+  return simulate_scene(model, p, rng);
+}
+
 TEST(Segmentation, CandidateCoresLieOnTopPipes) {
   const PipeModel& model = preset_model("u");
-  std::mt19937 rng(21);
-  SceneParams p;
-  p.pile.pipes = 12;
-  const SimulatedScene s = simulate_scene(model, p, rng);
+  const SimulatedScene s = pile_of(model, 12, 21);
   LocateConfig cfg;
   Locator loc(model, cfg, s.camera.intrinsics);
   loc.locate(s.depth_mm, s.camera);
@@ -180,10 +184,7 @@ TEST(Segmentation, CandidateCoresLieOnTopPipes) {
 
 TEST(Locator, EndToEndPickIsATopPipe) {
   const PipeModel& model = preset_model("sbend");
-  std::mt19937 rng(8);
-  SceneParams p;
-  p.pile.pipes = 10;
-  const SimulatedScene s = simulate_scene(model, p, rng);
+  const SimulatedScene s = pile_of(model, 10, 8);
   LocateConfig cfg;
   Locator loc(model, cfg, s.camera.intrinsics);
   const LocateOutput& out = loc.locate(s.depth_mm, s.camera);

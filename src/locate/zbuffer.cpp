@@ -21,6 +21,9 @@ void reserve_zbuffer(ZBuffer* zb, double max_side_mm, double pixel_mm) {
 int build_zbuffer(const Image<float>& depth, const Intrinsics& k, const Pose& bin_to_cam, ZBuffer* zb) {
   const Eigen::Matrix3f r = bin_to_cam.linear().transpose().cast<float>();  // camera -> bin
   const Eigen::Vector3f t = (-bin_to_cam.linear().transpose() * bin_to_cam.translation()).cast<float>();
+  const auto to_bin = [&](int u, int v, float d) -> Eigen::Vector3f {
+    return r * Eigen::Vector3f((u - float(k.cx)) * d / float(k.fx), (v - float(k.cy)) * d / float(k.fy), d) + t;
+  };
   // Pass 1: extent of the valid points.
   float lo_x = 1e30f, lo_y = 1e30f, hi_x = -1e30f, hi_y = -1e30f;
   int valid = 0;
@@ -28,9 +31,7 @@ int build_zbuffer(const Image<float>& depth, const Intrinsics& k, const Pose& bi
     for (int u = 0; u < depth.width; ++u) {
       const float d = depth.at(u, v);
       if (!(d > 0)) continue;
-      const Eigen::Vector3f p =
-          r * Eigen::Vector3f((u - float(k.cx)) * d / float(k.fx), (v - float(k.cy)) * d / float(k.fy), d) +
-          t;
+      const Eigen::Vector3f p = to_bin(u, v, d);
       lo_x = std::min(lo_x, p.x()), hi_x = std::max(hi_x, p.x());
       lo_y = std::min(lo_y, p.y()), hi_y = std::max(hi_y, p.y());
       ++valid;
@@ -55,9 +56,7 @@ int build_zbuffer(const Image<float>& depth, const Intrinsics& k, const Pose& bi
     for (int u = 0; u < depth.width; ++u) {
       const float d = depth.at(u, v);
       if (!(d > 0)) continue;
-      const Eigen::Vector3f p =
-          r * Eigen::Vector3f((u - float(k.cx)) * d / float(k.fx), (v - float(k.cy)) * d / float(k.fy), d) +
-          t;
+      const Eigen::Vector3f p = to_bin(u, v, d);
       const float half = 0.5f * d / float(k.fx) * inv;  // footprint half-width in cells
       const float ci = (p.x() - float(zb->origin_x_mm)) * inv, cj = (p.y() - float(zb->origin_y_mm)) * inv;
       const int i0 = std::max(0, int(std::lround(ci - half))),
