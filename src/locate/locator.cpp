@@ -117,8 +117,10 @@ const LocateOutput& Locator::locate(const Image<float>& depth, const CameraInfo&
   }
 
   // 7. Rank: best score first; the first pickable one is the pick handed to the PLC.
-  std::stable_sort(out_.estimates.begin(), out_.estimates.end(),
-                   [](const PipeEstimate& a, const PipeEstimate& b) { return a.score > b.score; });
+  // Ties keep candidate order; std::sort with that tie-break, since stable_sort allocates.
+  std::sort(out_.estimates.begin(), out_.estimates.end(), [](const PipeEstimate& a, const PipeEstimate& b) {
+    return a.score != b.score ? a.score > b.score : a.candidate < b.candidate;
+  });
   if (int(out_.estimates.size()) > cfg_.max_results) out_.estimates.resize(std::size_t(cfg_.max_results));
   out_.times.total_ms = ms_since(t_start);
   return out_;
