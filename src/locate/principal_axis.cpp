@@ -15,8 +15,8 @@ int count_sections(const ZBuffer& zb, const int* cells, int count, float theta, 
   std::int64_t* keys = buf->keys.data();
   for (int k = 0; k < count; ++k) {
     const float x = float(cells[k] % w), y = float(cells[k] / w);
-    const std::int64_t line = std::lround(-x * s + y * c) + (1 << 20);
-    const std::int64_t along = std::lround((x * c + y * s) * 4) + (1 << 24);  // quarter cells
+    const std::int64_t line = round_nearest(-x * s + y * c) + (1 << 20);
+    const std::int64_t along = round_nearest((x * c + y * s) * 4) + (1 << 24);  // quarter cells
     keys[k] = (line << 32) | along;
   }
   std::sort(keys, keys + count);

@@ -59,10 +59,10 @@ int build_zbuffer(const Image<float>& depth, const Intrinsics& k, const Pose& bi
       const Eigen::Vector3f p = to_bin(u, v, d);
       const float half = 0.5f * d / float(k.fx) * inv;  // footprint half-width in cells
       const float ci = (p.x() - float(zb->origin_x_mm)) * inv, cj = (p.y() - float(zb->origin_y_mm)) * inv;
-      const int i0 = std::max(0, int(std::lround(ci - half))),
-                i1 = std::min(zb->width - 1, int(std::lround(ci + half)));
-      const int j0 = std::max(0, int(std::lround(cj - half))),
-                j1 = std::min(zb->height - 1, int(std::lround(cj + half)));
+      const int i0 = std::max(0, int(round_nearest(ci - half))),
+                i1 = std::min(zb->width - 1, int(round_nearest(ci + half)));
+      const int j0 = std::max(0, int(round_nearest(cj - half))),
+                j1 = std::min(zb->height - 1, int(round_nearest(cj + half)));
       for (int j = j0; j <= j1; ++j)
         for (int i = i0; i <= i1; ++i) {
           float& cell = zb->z.at(i, j);
