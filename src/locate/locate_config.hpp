@@ -44,7 +44,7 @@ struct LocateConfig {
   int refine_max_points = 1500;            // observed points used by the refinement
   double refine_inlier_mm = 4;             // point-to-plane pairs farther than this are not the pipe
   double verify_tolerance_mm = 7;          // about 3 sigma of axial noise at 1.1 m plus a disparity step
-  double verify_min_agreement = 0.6;       // share of the model's visible pixels the sensor confirms
+  double verify_min_agreement = 0.7;       // share of the model's visible pixels the sensor confirms
   double verify_max_free_space = 0.05;     // share of model pixels where the sensor saw through it
   double verify_max_occluded = 0.15;       // share of model pixels covered by something in front
   int verify_hypotheses = 3;               // distinct ridge fits refined and checked per region
