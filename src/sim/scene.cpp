@@ -46,22 +46,23 @@ void render_all(const PipeModel& model, const Mesh& bin, const std::vector<Pose>
 std::vector<GtInfo> visibility_info(const PipeModel& model, const SimulatedScene& scene) {
   const int n = int(scene.model_to_world.size());
   std::vector<GtInfo> info(n);
-  DepthTarget alone;
+  // Each pipe alone, drawn only into the box it covers.
+  Image<float> alone(scene.camera.intrinsics.width, scene.camera.intrinsics.height, 0.0f);
   for (int i = 0; i < n; ++i) {
-    alone.reset(scene.camera.intrinsics.width, scene.camera.intrinsics.height);
-    render_perspective(model.mesh, scene.model_to_cam(i), scene.camera.intrinsics, i, &alone);
+    const PixelBox box = render_depth_in_box(model.mesh, scene.model_to_cam(i), scene.camera.intrinsics, &alone);
     int all = 0, visib = 0, valid = 0, by_pipes = 0;
-    for (std::size_t p = 0; p < alone.label.pixels.size(); ++p) {
-      if (alone.label.pixels[p] != i) continue;
-      ++all;
-      const int front = scene.clean.label.pixels[p];
-      if (front == i) {
-        ++visib;
-        if (scene.depth_mm.pixels[p] > 0) ++valid;
-      } else if (front >= 0 && front < n) {
-        ++by_pipes;
+    for (int y = box.y0; y <= box.y1; ++y)
+      for (int x = box.x0; x <= box.x1; ++x) {
+        if (alone.at(x, y) <= 0) continue;
+        ++all;
+        const int front = scene.clean.label.at(x, y);
+        if (front == i) {
+          ++visib;
+          if (scene.depth_mm.at(x, y) > 0) ++valid;
+        } else if (front >= 0 && front < n) {
+          ++by_pipes;
+        }
       }
-    }
     GtInfo& g = info[i];
     g.px_count_all = all;
     g.px_count_visib = visib;
