@@ -12,6 +12,8 @@ void add_score(CLI::App& app);
 void add_locate(CLI::App& app);
 void add_eval_bop(CLI::App& app);
 void add_bench(CLI::App& app);
+void add_serve(CLI::App& app);
+void add_record(CLI::App& app);
 
 // Exit status a callback asks for (0 unless set).
 int& exit_status();

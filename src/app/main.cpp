@@ -21,6 +21,8 @@ int main(int argc, char** argv) {
   pipeloc::app::add_locate(app);
   pipeloc::app::add_eval_bop(app);
   pipeloc::app::add_bench(app);
+  pipeloc::app::add_serve(app);
+  pipeloc::app::add_record(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

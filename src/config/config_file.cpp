@@ -3,100 +3,288 @@
 #include <toml++/toml.h>
 
 #include <filesystem>
+#include <set>
 #include <sstream>
 
 namespace pipeloc {
 namespace {
 
-struct Field {
-  const char* key;
-  double LocateConfig::*real = nullptr;
-  int LocateConfig::*integer = nullptr;
-  double min, max;
-  const char* unit;
-};
-
-#define REAL(name, lo, hi, unit) \
-  Field { #name, &LocateConfig::name, nullptr, lo, hi, unit }
-#define INT(name, lo, hi, unit) \
-  Field { #name, nullptr, &LocateConfig::name, lo, hi, unit }
-
-const Field kLocateFields[] = {
-    REAL(zbuffer_pixel_mm, 0.25, 10, "mm"),
-    REAL(zbuffer_max_side_mm, 100, 5000, "mm"),
-    REAL(hole_fill_mm, 0, 50, "mm"),
-    REAL(normal_window_mm, 1, 50, "mm"),
-    REAL(normal_min_valid_share, 0.05, 1, "share"),
-    REAL(upward_normal_max_deg, 1, 89, "deg"),
-    REAL(continuity_max_deg, 1, 89, "deg"),
-    REAL(continuity_step_max_mm, 0.1, 100, "mm"),
-    REAL(core_min_area_of_d2, 0, 100, "x D^2"),
-    REAL(core_max_extent_of_l, 0.1, 10, "x L"),
-    REAL(region_min_extent_of_l, 0, 2, "x L"),
-    REAL(convexity_min_share, 0, 1, "share"),
-    REAL(region_max_drop_of_d, 0.1, 5, "x D"),
-    REAL(section_width_min_of_d, 0.1, 2, "x D"),
-    REAL(section_width_max_of_d, 0.1, 3, "x D"),
-    REAL(scan_step_deg, 0.5, 45, "deg"),
-    REAL(ridge_cell_mm, 0.5, 10, "mm"),
-    INT(initial_rotations, 1, 12, "states per direction"),
-    INT(icp_max_iterations, 1, 500, "iterations"),
-    INT(icp_probe_iterations, 1, 500, "iterations"),
-    INT(icp_continued_states, 1, 48, "states"),
-    REAL(icp_converged_mm, 0.001, 10, "mm"),
-    REAL(residual_max_of_d, 0.01, 5, "x D"),
-    INT(refine_iterations, 0, 200, "iterations"),
-    REAL(refine_inlier_mm, 0.5, 50, "mm"),
-    INT(refine_max_points, 50, 100000, "points"),
-    REAL(verify_tolerance_mm, 0.5, 100, "mm"),
-    REAL(verify_min_agreement, 0, 1, "share"),
-    REAL(verify_max_free_space, 0, 1, "share"),
-    REAL(verify_max_occluded, 0, 1, "share"),
-    REAL(ambiguity_pose_mm, 0, 1000, "mm"),
-    REAL(ambiguity_quality_margin, 0, 1, "share"),
-    INT(verify_hypotheses, 1, 24, "fits per region"),
-    INT(max_candidates, 1, 256, "regions"),
-    INT(max_results, 1, 256, "poses"),
-    INT(threads, 1, 64, "threads"),
-};
-
 [[noreturn]] void fail(const std::string& path, const std::string& key, const std::string& what) {
   throw ConfigError("config '" + path + "': " + key + ": " + what);
 }
 
-void read_locate(const std::string& path, const toml::table& table, LocateConfig* cfg) {
-  for (const auto& [key, node] : table) {
-    const Field* field = nullptr;
-    for (const auto& f : kLocateFields)
-      if (key.str() == f.key) field = &f;
-    const std::string name = "locate." + std::string(key.str());
-    if (!field) fail(path, name, "unknown key");
-    std::ostringstream range;
-    range << "expected " << (field->integer ? "an integer" : "a number") << " in [" << field->min << ", "
-          << field->max << "] " << field->unit;
-    double value;
-    if (field->integer) {
-      const auto v = node.value_exact<std::int64_t>();
-      if (!v) fail(path, name, range.str());
-      value = double(*v);
-    } else {
-      const auto v = node.value<double>();
-      if (!v || !node.is_number()) fail(path, name, range.str());
-      value = *v;
+// One [section] of the file: each read takes its key (or keeps the default), checks type and
+// range, and records the value in effect; finish() rejects keys nobody asked for.
+class Section {
+ public:
+  Section(const std::string& file, std::string name, const toml::table* table, std::vector<std::string>* effective)
+      : file_(file), name_(std::move(name)), table_(table), effective_(effective) {}
+
+  void real(const char* key, double* dst, double lo, double hi, const char* unit) {
+    if (const toml::node* n = take(key)) {
+      const auto v = n->value<double>();
+      if (!v || !n->is_number() || !(*v >= lo && *v <= hi)) fail(file_, full(key), range("a number", lo, hi, unit));
+      *dst = *v;
     }
-    if (!(value >= field->min && value <= field->max)) fail(path, name, range.str());
-    if (field->integer)
-      cfg->*(field->integer) = int(value);
-    else
-      cfg->*(field->real) = value;
+    record(key, *dst, unit);
   }
-  if (cfg->section_width_min_of_d >= cfg->section_width_max_of_d)
-    fail(path, "locate.section_width_min_of_d", "must be below locate.section_width_max_of_d");
+  void integer(const char* key, int* dst, int lo, int hi, const char* unit) {
+    if (const toml::node* n = take(key)) {
+      const auto v = n->value_exact<std::int64_t>();
+      if (!v || *v < lo || *v > hi) fail(file_, full(key), range("an integer", lo, hi, unit));
+      *dst = int(*v);
+    }
+    record(key, *dst, unit);
+  }
+  void boolean(const char* key, bool* dst) {
+    if (const toml::node* n = take(key)) {
+      const auto v = n->value_exact<bool>();
+      if (!v) fail(file_, full(key), "expected true or false");
+      *dst = *v;
+    }
+    record(key, *dst ? "true" : "false", "");
+  }
+  // choices empty: any string (allow_empty says whether "" is fine).
+  void text(const char* key, std::string* dst, std::initializer_list<const char*> choices = {},
+            bool allow_empty = true) {
+    if (const toml::node* n = take(key)) {
+      const auto v = n->value_exact<std::string>();
+      std::string expected = "expected a string";
+      if (choices.size()) {
+        expected = "expected one of";
+        for (const char* c : choices) expected += std::string(" \"") + c + "\"";
+      }
+      if (!v) fail(file_, full(key), expected);
+      bool ok = choices.size() == 0 && (allow_empty || !v->empty());
+      for (const char* c : choices) ok = ok || *v == c;
+      if (!ok) fail(file_, full(key), expected + (v->empty() ? " (got an empty string)" : ", got \"" + *v + "\""));
+      *dst = *v;
+    }
+    record(key, "\"" + *dst + "\"", "");
+  }
+  // A fixed count of numbers; `optional` allows the key to be absent (dst stays empty).
+  void numbers(const char* key, std::vector<double>* dst, std::size_t count, const char* unit) {
+    if (const toml::node* n = take(key)) {
+      const toml::array* a = n->as_array();
+      const std::string expected = "expected an array of " + std::to_string(count) + " numbers (" + unit + ")";
+      if (!a || a->size() != count) fail(file_, full(key), expected);
+      dst->clear();
+      for (const toml::node& e : *a) {
+        const auto v = e.value<double>();
+        if (!v || !e.is_number() || !std::isfinite(*v)) fail(file_, full(key), expected);
+        dst->push_back(*v);
+      }
+    }
+    std::ostringstream s;
+    s << "[";
+    for (std::size_t i = 0; i < dst->size(); ++i) s << (i ? ", " : "") << (*dst)[i];
+    s << "]";
+    record(key, s.str(), unit);
+  }
+  void triple(const char* key, std::array<double, 3>* dst, const char* unit) {
+    std::vector<double> v(dst->begin(), dst->end());
+    numbers(key, &v, 3, unit);
+    std::copy(v.begin(), v.end(), dst->begin());
+  }
+  void finish() const {
+    if (!table_) return;
+    for (const auto& [key, node] : *table_) {
+      if (node.is_table()) continue;  // a sub-section, read by its own Section
+      if (!taken_.count(std::string(key.str()))) fail(file_, full(std::string(key.str()).c_str()), "unknown key");
+    }
+  }
+  const std::string& file() const { return file_; }
+  std::string full(const char* key) const { return name_ + "." + key; }
+
+ private:
+  const toml::node* take(const char* key) {
+    taken_.insert(key);
+    return table_ ? table_->get(key) : nullptr;
+  }
+  static std::string range(const char* what, double lo, double hi, const char* unit) {
+    std::ostringstream s;
+    s << "expected " << what << " in [" << lo << ", " << hi << "] " << unit;
+    return s.str();
+  }
+  template <typename T>
+  void record(const char* key, const T& value, const char* unit) {
+    std::ostringstream s;
+    s << full(key) << " = " << value;
+    if (*unit) s << "  # " << unit;
+    effective_->push_back(s.str());
+  }
+
+  std::string file_, name_;
+  const toml::table* table_;
+  std::vector<std::string>* effective_;
+  std::set<std::string> taken_;
+};
+
+void read_locate(Section& s, LocateConfig* c) {
+  s.real("zbuffer_pixel_mm", &c->zbuffer_pixel_mm, 0.25, 10, "mm");
+  s.real("zbuffer_max_side_mm", &c->zbuffer_max_side_mm, 100, 5000, "mm");
+  s.real("hole_fill_mm", &c->hole_fill_mm, 0, 50, "mm");
+  s.real("normal_window_mm", &c->normal_window_mm, 1, 50, "mm");
+  s.real("normal_min_valid_share", &c->normal_min_valid_share, 0.05, 1, "share");
+  s.real("upward_normal_max_deg", &c->upward_normal_max_deg, 1, 89, "deg");
+  s.real("continuity_max_deg", &c->continuity_max_deg, 1, 89, "deg");
+  s.real("continuity_step_max_mm", &c->continuity_step_max_mm, 0.1, 100, "mm");
+  s.real("core_min_area_of_d2", &c->core_min_area_of_d2, 0, 100, "x D^2");
+  s.real("core_max_extent_of_l", &c->core_max_extent_of_l, 0.1, 10, "x L");
+  s.real("region_min_extent_of_l", &c->region_min_extent_of_l, 0, 2, "x L");
+  s.real("convexity_min_share", &c->convexity_min_share, 0, 1, "share");
+  s.real("region_max_drop_of_d", &c->region_max_drop_of_d, 0.1, 5, "x D");
+  s.real("section_width_min_of_d", &c->section_width_min_of_d, 0.1, 2, "x D");
+  s.real("section_width_max_of_d", &c->section_width_max_of_d, 0.1, 3, "x D");
+  s.real("scan_step_deg", &c->scan_step_deg, 0.5, 45, "deg");
+  s.real("ridge_cell_mm", &c->ridge_cell_mm, 0.5, 10, "mm");
+  s.integer("initial_rotations", &c->initial_rotations, 1, 12, "states per direction");
+  s.integer("icp_max_iterations", &c->icp_max_iterations, 1, 500, "iterations");
+  s.integer("icp_probe_iterations", &c->icp_probe_iterations, 1, 500, "iterations");
+  s.integer("icp_continued_states", &c->icp_continued_states, 1, 48, "states");
+  s.real("icp_converged_mm", &c->icp_converged_mm, 0.001, 10, "mm");
+  s.real("residual_max_of_d", &c->residual_max_of_d, 0.01, 5, "x D");
+  s.integer("refine_iterations", &c->refine_iterations, 0, 200, "iterations");
+  s.real("refine_inlier_mm", &c->refine_inlier_mm, 0.5, 50, "mm");
+  s.integer("refine_max_points", &c->refine_max_points, 50, 100000, "points");
+  s.real("verify_tolerance_mm", &c->verify_tolerance_mm, 0.5, 100, "mm");
+  s.real("verify_min_agreement", &c->verify_min_agreement, 0, 1, "share");
+  s.real("verify_max_free_space", &c->verify_max_free_space, 0, 1, "share");
+  s.real("verify_max_occluded", &c->verify_max_occluded, 0, 1, "share");
+  s.real("ambiguity_pose_mm", &c->ambiguity_pose_mm, 0, 1000, "mm");
+  s.real("ambiguity_quality_margin", &c->ambiguity_quality_margin, 0, 1, "share");
+  s.integer("verify_hypotheses", &c->verify_hypotheses, 1, 24, "fits per region");
+  s.integer("max_candidates", &c->max_candidates, 1, 256, "regions");
+  s.integer("max_results", &c->max_results, 1, 256, "poses");
+  s.integer("threads", &c->threads, 1, 64, "threads");
+  s.finish();
+  if (c->section_width_min_of_d >= c->section_width_max_of_d)
+    fail(s.file(), "locate.section_width_min_of_d", "must be below locate.section_width_max_of_d");
+}
+
+void read_model(Section& s, const std::string& file, ModelConfig* m) {
+  s.text("stl", &m->stl);
+  s.text("preset", &m->preset, {"", "sbend", "u", "torus"});
+  s.triple("grasp_xyz_mm", &m->grasp_xyz_mm, "mm, model frame");
+  s.triple("grasp_rxyz_deg", &m->grasp_rxyz_deg, "deg, plc.euler convention");
+  s.finish();
+  if (!m->stl.empty() && !m->preset.empty()) fail(file, "model", "give either stl or preset, not both");
+  if (!m->stl.empty() && std::filesystem::path(m->stl).is_relative() && !file.empty())
+    m->stl = (std::filesystem::path(file).parent_path() / m->stl).lexically_normal().string();
+}
+
+void read_source(const std::string& file, const toml::table* t, std::vector<std::string>* eff, SourceConfig* c) {
+  auto sub = [&](const char* name) -> const toml::table* {
+    if (!t) return nullptr;
+    const toml::node* n = t->get(name);
+    if (n && !n->is_table()) fail(file, std::string("source.") + name, "expected a [source." + std::string(name) + "] table");
+    return n ? n->as_table() : nullptr;
+  };
+  Section s(file, "source", t, eff);
+  s.text("kind", &c->kind, {"sim", "replay", "openni2"});
+  s.finish();
+  if (t)
+    for (const auto& [key, node] : *t)
+      if (node.is_table() && key.str() != "sim" && key.str() != "replay" && key.str() != "openni2")
+        fail(file, "source." + std::string(key.str()), "unknown section (expected sim, replay or openni2)");
+
+  Section sim(file, "source.sim", sub("sim"), eff);
+  sim.integer("pipes", &c->sim.pipes, 1, 200, "pipes");
+  sim.integer("seed", &c->sim.seed, 0, 1 << 30, "");
+  sim.real("tilt_deg", &c->sim.tilt_deg, 0, 45, "deg");
+  sim.boolean("refill", &c->sim.refill);
+  sim.finish();
+
+  Section rp(file, "source.replay", sub("replay"), eff);
+  rp.text("path", &c->replay.path);
+  rp.text("camera", &c->replay.camera);
+  rp.integer("max_frames", &c->replay.max_frames, 1, 100000, "frames");
+  rp.finish();
+  auto relative_to_file = [&](std::string* p) {
+    if (!p->empty() && std::filesystem::path(*p).is_relative() && !file.empty())
+      *p = (std::filesystem::path(file).parent_path() / *p).lexically_normal().string();
+  };
+  relative_to_file(&c->replay.path);
+  relative_to_file(&c->replay.camera);
+  if (c->kind == "replay" && c->replay.path.empty())
+    fail(file, "source.replay.path", "expected a BOP dataset or a folder of depth PNGs (source.kind is \"replay\")");
+
+  Section on(file, "source.openni2", sub("openni2"), eff);
+  on.text("uri", &c->openni2.uri);
+  on.real("fx", &c->openni2.fx, 1, 10000, "px");
+  on.real("fy", &c->openni2.fy, 1, 10000, "px");
+  on.real("cx", &c->openni2.cx, 0, 10000, "px");
+  on.real("cy", &c->openni2.cy, 0, 10000, "px");
+  on.integer("calib_width", &c->openni2.calib_width, 1, 10000, "px");
+  on.integer("calib_height", &c->openni2.calib_height, 1, 10000, "px");
+  on.integer("frame_timeout_ms", &c->openni2.frame_timeout_ms, 10, 60000, "ms");
+  on.integer("reopen_interval_ms", &c->openni2.reopen_interval_ms, 10, 600000, "ms");
+  on.numbers("world_to_cam", &c->openni2.world_to_cam, 16, "4x4 row-major, mm");
+  on.finish();
+}
+
+void read_plc(Section& s, PlcConfig* p) {
+  s.text("mode", &p->mode, {"server", "client", "none"});
+  s.text("address", &p->address, {}, false);
+  s.integer("port", &p->port, 1, 65535, "");
+  s.integer("base", &p->base, 0, 65535 - reg::kSize, "register");
+  s.integer("unit_id", &p->unit_id, 0, 255, "");
+  s.integer("max_clients", &p->max_clients, 1, 64, "connections");
+  s.integer("poll_ms", &p->poll_ms, 5, 10000, "ms");
+  s.integer("reconnect_max_ms", &p->reconnect_max_ms, 100, 600000, "ms");
+  s.integer("byte_timeout_ms", &p->byte_timeout_ms, 10, 5000, "ms");
+  std::string order = word_order_name(p->encoding.order);
+  s.text("word_order", &order, {"ABCD", "CDAB", "BADC", "DCBA"});
+  p->encoding.order = parse_word_order(order);
+  std::string encoding = p->encoding.scaled_int32 ? "scaled_int32" : "float32";
+  s.text("encoding", &encoding, {"float32", "scaled_int32"});
+  p->encoding.scaled_int32 = encoding == "scaled_int32";
+  std::string euler = p->euler == EulerConvention::zyx ? "ZYX" : "XYZ";
+  s.text("euler", &euler, {"ZYX", "XYZ"});
+  p->euler = parse_euler_convention(euler);
+  s.numbers("robot_from_camera", &p->robot_from_camera, 16, "4x4 row-major, mm");
+  s.finish();
+}
+
+void read_all(const std::string& file, const toml::table& root, AppConfig* cfg) {
+  static const char* const kSections[] = {"model", "locate", "source", "service", "plc", "log"};
+  for (const auto& [key, node] : root) {
+    bool known = false;
+    for (const char* s : kSections) known = known || key.str() == s;
+    if (!known) fail(file, std::string(key.str()), "unknown section (expected [model], [locate], [source], [service], [plc] or [log])");
+    if (!node.is_table()) fail(file, std::string(key.str()), "expected a [" + std::string(key.str()) + "] table");
+  }
+  auto table = [&](const char* name) { return root.get_as<toml::table>(name); };
+  auto* eff = &cfg->effective;
+
+  Section model(file, "model", table("model"), eff);
+  read_model(model, file, &cfg->model);
+  cfg->model_path = cfg->model.stl;
+
+  Section locate(file, "locate", table("locate"), eff);
+  read_locate(locate, &cfg->locate);
+
+  read_source(file, table("source"), eff, &cfg->source);
+
+  Section service(file, "service", table("service"), eff);
+  service.real("budget_ms", &cfg->service.budget_ms, 5, 60000, "ms");
+  service.integer("summary_every", &cfg->service.summary_every, 1, 1000000, "cycles");
+  service.finish();
+
+  Section plc(file, "plc", table("plc"), eff);
+  read_plc(plc, &cfg->plc);
+
+  Section log(file, "log", table("log"), eff);
+  log.text("dir", &cfg->log.dir, {}, false);
+  log.integer("max_file_kb", &cfg->log.max_file_kb, 1, 1 << 22, "KiB");
+  log.integer("keep_files", &cfg->log.keep_files, 1, 1000, "files");
+  log.finish();
 }
 
 }  // namespace
 
 AppConfig load_config(const std::string& path) {
+  if (!std::filesystem::is_regular_file(path)) throw ConfigError("config '" + path + "': no such file");
   toml::table root;
   try {
     root = toml::parse_file(path);
@@ -106,42 +294,17 @@ AppConfig load_config(const std::string& path) {
     throw ConfigError(msg.str());
   }
   AppConfig cfg;
-  for (const auto& [key, node] : root) {
-    const std::string section(key.str());
-    if (!node.is_table()) fail(path, section, "expected a [" + section + "] table");
-    const toml::table& t = *node.as_table();
-    if (section == "locate") {
-      read_locate(path, t, &cfg.locate);
-    } else if (section == "model") {
-      for (const auto& [k, v] : t) {
-        if (k.str() != "stl") fail(path, "model." + std::string(k.str()), "unknown key");
-        const auto s = v.value<std::string>();
-        if (!s || s->empty()) fail(path, "model.stl", "expected a path to the pipe's STL file");
-        std::filesystem::path p(*s);
-        if (p.is_relative()) p = std::filesystem::path(path).parent_path() / p;
-        cfg.model_path = p.lexically_normal().string();
-      }
-    } else {
-      fail(path, section, "unknown section (expected [model] or [locate])");
-    }
-  }
+  cfg.path = path;
+  read_all(path, root, &cfg);
   return cfg;
 }
 
-std::vector<std::string> describe_config(const AppConfig& cfg) {
-  std::vector<std::string> lines;
-  lines.push_back("model.stl = \"" + cfg.model_path + "\"");
-  for (const auto& f : kLocateFields) {
-    std::ostringstream s;
-    s << "locate." << f.key << " = ";
-    if (f.integer)
-      s << cfg.locate.*(f.integer);
-    else
-      s << cfg.locate.*(f.real);
-    s << "  # " << f.unit;
-    lines.push_back(s.str());
-  }
-  return lines;
+AppConfig default_config() {
+  AppConfig cfg;
+  read_all("", toml::table{}, &cfg);
+  return cfg;
 }
+
+std::vector<std::string> describe_config(const AppConfig& cfg) { return cfg.effective; }
 
 }  // namespace pipeloc

@@ -1,12 +1,15 @@
 // The TOML configuration, validated once at start-up: an unknown key, a wrong type or a value
 // out of range stops the program with a message naming the file, the key and what was expected.
+// Every value in effect (given or default) is listed for the start-up log.
 #pragma once
 
+#include <array>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "locate/locate_config.hpp"
+#include "plc/register_map.hpp"
 
 namespace pipeloc {
 
@@ -14,12 +17,84 @@ struct ConfigError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+struct ModelConfig {
+  std::string stl;                         // path, relative to the config file; or ...
+  std::string preset;                      // ... a built-in pipe (sbend, u, torus)
+  std::array<double, 3> grasp_xyz_mm{};    // where the gripper closes, in the model frame
+  std::array<double, 3> grasp_rxyz_deg{};  // its rotation, in plc.euler's convention
+};
+
+struct SimSourceConfig {
+  int pipes = 20;
+  int seed = 1;
+  double tilt_deg = 0;  // camera tilt from vertical, drawn in [0, this] per bin
+  bool refill = true;   // a new bin when the last pipe has been picked
+};
+
+struct ReplaySourceConfig {
+  std::string path;    // a BOP dataset (test/SSSSSS/depth/*.png) or a folder of depth PNGs
+  std::string camera;  // scene_camera.json for a folder of PNGs (its first entry serves all)
+  int max_frames = 1000;  // frames held in memory (read and checked at start-up)
+};
+
+struct OpenNi2SourceConfig {
+  std::string uri;  // "" = any device; "Dummy" = OpenNI2's fake device
+  // Used when the device reports no field of view (the Dummy device): scaled to its resolution.
+  double fx = 570.3, fy = 570.3, cx = 319.5, cy = 239.5;
+  int calib_width = 640, calib_height = 480;
+  int frame_timeout_ms = 500;   // no frame in this time: sensor unavailable
+  int reopen_interval_ms = 1000;  // a lost device is reopened at most this often
+  std::vector<double> world_to_cam;  // optional 16 values, row-major, mm: the bin frame (Z up)
+};
+
+struct SourceConfig {
+  std::string kind = "sim";  // sim | replay | openni2
+  SimSourceConfig sim;
+  ReplaySourceConfig replay;
+  OpenNi2SourceConfig openni2;
+};
+
+struct ServiceConfig {
+  double budget_ms = 250;    // trigger to result; localization stops early to keep it
+  int summary_every = 100;   // cycles between summary lines in the timing log
+};
+
+struct PlcConfig {
+  std::string mode = "server";  // server | client | none
+  std::string address = "127.0.0.1";
+  int port = 1502;
+  int base = 0;          // first holding register of the map
+  int unit_id = 1;       // client mode: the PLC's unit identifier
+  int max_clients = 8;   // server mode: connections served at once
+  int poll_ms = 50;      // client mode: how often CMD/REQ_ID are read
+  int reconnect_max_ms = 5000;  // client mode: backoff cap
+  int byte_timeout_ms = 100;    // a request that stalls longer mid-frame is dropped
+  reg::Encoding encoding;
+  EulerConvention euler = EulerConvention::zyx;
+  std::vector<double> robot_from_camera;  // optional 16 values, row-major, mm: hand-eye
+};
+
+struct LogConfig {
+  std::string dir = "pipeloc-log";  // timing log folder, relative to the working directory
+  int max_file_kb = 10240;          // a log file is rotated beyond this size
+  int keep_files = 5;               // rotated files kept (timing.jsonl.1 .. .N)
+};
+
 struct AppConfig {
-  std::string model_path;  // [model] stl = "...", relative to the config file
+  std::string path;        // the file it came from ("" = built-in defaults)
+  std::string model_path;  // = model.stl resolved; kept for the offline commands
+  ModelConfig model;
   LocateConfig locate;
+  SourceConfig source;
+  ServiceConfig service;
+  PlcConfig plc;
+  LogConfig log;
+  std::vector<std::string> effective;  // "section.key = value  # unit" for every value in effect
 };
 
 AppConfig load_config(const std::string& path);
+// The built-in defaults, as if from an empty file.
+AppConfig default_config();
 // Every value in effect, one "section.key = value" line each, for the start-up log.
 std::vector<std::string> describe_config(const AppConfig& cfg);
 

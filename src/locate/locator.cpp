@@ -128,8 +128,8 @@ const LocateOutput& Locator::locate(const Image<float>& depth, const CameraInfo&
 
 void Locator::candidate_task(void* frame, int c, int worker) {
   const Frame& f = *static_cast<const Frame*>(frame);
-  if (Clock::now() >= f.deadline) return;  // trace stays "budget"
-  f.self->work_candidate(c, f.self->workers_[std::size_t(worker)], *f.depth, *f.camera, f.bin_to_cam);
+  if (f.self->out_of_time(f.deadline)) return;  // trace stays "budget"
+  f.self->work_candidate(c, f.self->workers_[std::size_t(worker)], *f.depth, *f.camera, f.bin_to_cam, f.deadline);
 }
 
 void Locator::merge_estimate(int c) {
@@ -150,7 +150,7 @@ void Locator::merge_estimate(int c) {
 }
 
 void Locator::work_candidate(int c, Worker& wk, const Image<float>& depth, const CameraInfo& camera,
-                             const Pose& bin_to_cam) {
+                             const Pose& bin_to_cam, Clock::time_point deadline) {
   const CandidateRegion& region = rb_.candidates[std::size_t(c)];
   CandidateTrace& trace = out_.traces[std::size_t(c)];
   const int* cells = &rb_.region_cells[std::size_t(region.cells_begin)];
@@ -162,6 +162,8 @@ void Locator::work_candidate(int c, Worker& wk, const Image<float>& depth, const
   auto t = Clock::now();
   trace.axis = estimate_axis(zb_, cells, count, region.core_centroid, cfg_, d, &wk.ab);
   wk.times.axis_ms += ms_since(t);
+  // The budget is checked between steps: a candidate cut short leaves no estimate ("budget").
+  if (out_of_time(deadline)) return;
 
   // IV-A: observed Z-ridge of the region.
   t = Clock::now();
@@ -194,6 +196,10 @@ void Locator::work_candidate(int c, Worker& wk, const Image<float>& depth, const
                   std::max(1, cfg_.icp_max_iterations - done), &wk.icp, f.gate_mm);
   }
   wk.fits.resize(std::size_t(keep));
+  if (out_of_time(deadline)) {
+    wk.times.ridge_icp_ms += ms_since(t);
+    return;
+  }
   // The refinement needs far fewer points than the region holds: keep an even subset.
   const int stride = std::max(1, count / cfg_.refine_max_points);
   int refine_count = 0;
@@ -224,6 +230,7 @@ void Locator::work_candidate(int c, Worker& wk, const Image<float>& depth, const
       seen = wk.fits[j].cost_mm <= float(cfg_.residual_max_of_d) * d &&
              pose_distance_mm(lm_, wk.fits[i].pose, wk.fits[j].pose) < float(cfg_.ambiguity_pose_mm);
     if (seen) continue;
+    if (out_of_time(deadline)) return;  // an unchecked runner-up could hide an ambiguity
     ++tried;
     t = Clock::now();
     const RefineResult refined =

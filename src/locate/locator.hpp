@@ -2,6 +2,7 @@
 // constructor from the camera and the model; locate() itself does not allocate.
 #pragma once
 
+#include <atomic>
 #include <chrono>
 #include <vector>
 
@@ -78,6 +79,9 @@ class Locator {
   const LocateOutput& locate(const Image<float>& depth_mm, const CameraInfo& camera,
                              Clock::time_point deadline = Clock::time_point::max());
 
+  // A flag that, once set, ends a cycle as if its deadline had passed (the service's shutdown).
+  void set_cancel_flag(const std::atomic<bool>* cancel) { cancel_ = cancel; }
+
   const LocateOutput& output() const { return out_; }
   const ZBuffer& zbuffer() const { return zb_; }
   const RegionBuffers& regions() const { return rb_; }
@@ -104,8 +108,11 @@ class Locator {
   };
   static void candidate_task(void* frame, int c, int worker);
   void work_candidate(int c, Worker& wk, const Image<float>& depth, const CameraInfo& camera,
-                      const Pose& bin_to_cam);
+                      const Pose& bin_to_cam, Clock::time_point deadline);
   void merge_estimate(int c);
+  bool out_of_time(Clock::time_point deadline) const {
+    return (cancel_ && cancel_->load(std::memory_order_relaxed)) || Clock::now() >= deadline;
+  }
 
   const PipeModel& model_;
   LocateConfig cfg_;
@@ -121,6 +128,7 @@ class Locator {
   std::vector<char> slot_filled_;
   LocateOutput out_;
   int ridge_capacity_ = 0;
+  const std::atomic<bool>* cancel_ = nullptr;
 };
 
 }  // namespace pipeloc

@@ -32,4 +32,24 @@ void write_result_block(const Result& r, const Encoding& enc, std::uint16_t* map
     put(valid ? r.pose->wxyz[std::size_t(i)] : nan, 10000.0, enc, &map[kQuat + 2 * i]);
 }
 
+void write_initial(const Encoding& enc, std::uint16_t* map) {
+  for (int i = 0; i < kSize; ++i) map[i] = 0;
+  write_result_block(Result{}, enc, map);
+  map[kStatus] = std::uint16_t(Status::ready);
+}
+
+void write_busy(const Encoding& enc, std::uint16_t* map) {
+  const double nan = std::nan("");
+  for (int i = 0; i < 6; ++i) put(nan, i < 3 ? 100.0 : 1000.0, enc, &map[kPose + 2 * i]);
+  put(nan, 10000.0, enc, &map[kScore]);
+  for (int i = 0; i < 4; ++i) put(nan, 10000.0, enc, &map[kQuat + 2 * i]);
+  map[kStatus] = std::uint16_t(Status::busy);
+}
+
+void write_result(const Result& result, std::uint16_t ack_id, const Encoding& enc, std::uint16_t* map) {
+  write_result_block(result, enc, map);
+  map[kStatus] = std::uint16_t(result.status);
+  map[kAckId] = ack_id;
+}
+
 }  // namespace pipeloc::reg

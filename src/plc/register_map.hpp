@@ -48,4 +48,12 @@ struct Result {
 // and quaternion hold NaN (or the int32 sentinel), so a stale pose can never be read as new.
 void write_result_block(const Result& result, const Encoding& enc, std::uint16_t* map);
 
+// The handshake's writes, in DESIGN.md's order, on a map of kSize registers:
+// start-up: everything zero, STATUS READY, pose NaN.
+void write_initial(const Encoding& enc, std::uint16_t* map);
+// A command was taken up: STATUS BUSY and the pose NaN (the old one is no longer current).
+void write_busy(const Encoding& enc, std::uint16_t* map);
+// The result: the block, then STATUS, then ACK_ID last.
+void write_result(const Result& result, std::uint16_t ack_id, const Encoding& enc, std::uint16_t* map);
+
 }  // namespace pipeloc::reg

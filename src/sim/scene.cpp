@@ -7,6 +7,8 @@ namespace {
 
 constexpr double kDeg = M_PI / 180.0;
 
+}  // namespace
+
 // Camera above the bin looking down at its centre, tilted by `tilt_deg` towards `azimuth`.
 Pose draw_camera(const SceneParams& p, std::mt19937& rng) {
   std::uniform_real_distribution<double> uniform(0.0, 1.0);
@@ -33,6 +35,8 @@ Pose draw_camera(const SceneParams& p, std::mt19937& rng) {
   return world_to_cam;
 }
 
+namespace {
+
 void render_all(const PipeModel& model, const Mesh& bin, const std::vector<Pose>& poses,
                 const Pose& world_to_cam, const Intrinsics& k, DepthTarget* target) {
   target->reset(k.width, k.height);
@@ -42,6 +46,16 @@ void render_all(const PipeModel& model, const Mesh& bin, const std::vector<Pose>
 }
 
 }  // namespace
+
+void render_views(const PipeModel& model, const std::vector<Pose>& model_to_world, const Pose& world_to_cam,
+                  const SceneParams& params, DepthTarget* camera, DepthTarget* projector) {
+  const Mesh bin = make_bin_mesh(params.pile.bin);
+  render_all(model, bin, model_to_world, world_to_cam, params.intrinsics, camera);
+  // The projector sits beside the camera: its view is the camera's shifted along camera x.
+  Pose world_to_projector = world_to_cam;
+  world_to_projector.translation().x() -= params.sensor.baseline_mm;
+  render_all(model, bin, model_to_world, world_to_projector, params.intrinsics, projector);
+}
 
 std::vector<GtInfo> visibility_info(const PipeModel& model, const SimulatedScene& scene) {
   const int n = int(scene.model_to_world.size());
@@ -82,13 +96,8 @@ SimulatedScene render_scene(const PipeModel& model, std::vector<Pose> model_to_w
   scene.camera.intrinsics = params.intrinsics;
   scene.camera.depth_scale = 1.0;
   scene.camera.world_to_cam = draw_camera(params, rng);
-  const Mesh bin = make_bin_mesh(params.pile.bin);
-  render_all(model, bin, scene.model_to_world, *scene.camera.world_to_cam, params.intrinsics, &scene.clean);
-  // The projector sits beside the camera: its view is the camera's shifted along camera x.
-  Pose world_to_projector = *scene.camera.world_to_cam;
-  world_to_projector.translation().x() -= params.sensor.baseline_mm;
   DepthTarget projector;
-  render_all(model, bin, scene.model_to_world, world_to_projector, params.intrinsics, &projector);
+  render_views(model, scene.model_to_world, *scene.camera.world_to_cam, params, &scene.clean, &projector);
   scene.depth_mm = apply_sensor_model(scene.clean, projector, params.intrinsics, params.sensor,
                                       int(scene.model_to_world.size()), rng);
   scene.info = visibility_info(model, scene);

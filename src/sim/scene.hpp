@@ -29,6 +29,14 @@ struct SimulatedScene {
   Pose model_to_cam(std::size_t i) const { return *camera.world_to_cam * model_to_world[i]; }
 };
 
+// A camera above the bin looking down at its centre (world_to_cam), within params' ranges.
+Pose draw_camera(const SceneParams& params, std::mt19937& rng);
+
+// Clean renders of bin and pipes from the camera and from the projector beside it (labels:
+// pipe i = i, the bin = the number of pipes).
+void render_views(const PipeModel& model, const std::vector<Pose>& model_to_world, const Pose& world_to_cam,
+                  const SceneParams& params, DepthTarget* camera, DepthTarget* projector);
+
 // Draws a camera and renders the given pile through the sensor model.
 SimulatedScene render_scene(const PipeModel& model, std::vector<Pose> model_to_world,
                             const SceneParams& params, std::mt19937& rng);

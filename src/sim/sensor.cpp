@@ -15,40 +15,60 @@ double incidence_deg(const Eigen::Vector3f& normal, const Eigen::Vector3d& point
 
 }  // namespace
 
-Image<float> apply_sensor_model(const DepthTarget& cam, const DepthTarget& proj, const Intrinsics& k,
-                                const SensorModel& m, int pipe_labels, std::mt19937& rng) {
+SensorView prepare_sensor_view(const DepthTarget& cam, const DepthTarget& proj, const Intrinsics& k,
+                               const SensorModel& m) {
   const int w = cam.z_mm.width, h = cam.z_mm.height;
-  Image<float> out(w, h, 0.0f);
-  std::normal_distribution<double> gauss(0.0, 1.0);
-  std::uniform_real_distribution<double> uniform(0.0, 1.0);
-  const double fb = k.fx * m.baseline_mm;
-
+  SensorView view;
+  view.z_mm = cam.z_mm;
+  view.label = cam.label;
+  view.incidence_deg.resize(w, h, 0.0f);
+  view.reach.resize(w, h, SensorView::none);
   for (int y = 0; y < h; ++y) {
     for (int x = 0; x < w; ++x) {
-      // Lateral noise: the pixel reports the surface a fraction of a pixel away.
-      const int sx = std::clamp(int(std::lround(x + gauss(rng) * m.lateral_sigma_px)), 0, w - 1);
-      const int sy = std::clamp(int(std::lround(y + gauss(rng) * m.lateral_sigma_px)), 0, h - 1);
-      const float z = cam.z_mm.at(sx, sy);
-      if (z <= 0 || z < m.min_range_mm || z > m.max_range_mm) continue;
-      const Eigen::Vector3d p = k.unproject(sx, sy, z);
-
-      const double theta = incidence_deg(cam.normal.at(sx, sy), p);
-      const double grazing = m.grazing_min_deg + uniform(rng) * (m.grazing_max_deg - m.grazing_min_deg);
-      if (theta > grazing) continue;
-
+      const float z = cam.z_mm.at(x, y);
+      if (z <= 0) continue;
+      const Eigen::Vector3d p = k.unproject(x, y, z);
+      view.incidence_deg.at(x, y) = float(incidence_deg(cam.normal.at(x, y), p));
+      if (z < m.min_range_mm || z > m.max_range_mm) continue;
       // Projector shadow: the pattern cannot reach a point the projector does not see first.
+      view.reach.at(x, y) = SensorView::shadowed;
       const Eigen::Vector3d pp = p - Eigen::Vector3d(m.baseline_mm, 0, 0);
       const Eigen::Vector2d uv = k.project(pp);
       const int px = int(std::lround(uv.x())), py = int(std::lround(uv.y()));
       if (!proj.z_mm.inside(px, py)) continue;
       const float zp = proj.z_mm.at(px, py);
       if (zp <= 0 || pp.z() > zp + m.shadow_tolerance_mm + m.depth_step_mm(zp, k.fx)) continue;
+      view.reach.at(x, y) = SensorView::lit;
+    }
+  }
+  return view;
+}
 
+void apply_sensor_noise(const SensorView& view, const Intrinsics& k, const SensorModel& m, int pipe_labels,
+                        std::mt19937& rng, Image<float>* out_mm) {
+  const int w = view.z_mm.width, h = view.z_mm.height;
+  out_mm->fill(0.0f);
+  Image<float>& out = *out_mm;
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  const double fb = k.fx * m.baseline_mm;
+  const double cos_noisy = std::cos(m.noisy_incidence_deg * kDeg);
+
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      // Lateral noise: the pixel reports the surface a fraction of a pixel away.
+      const int sx = std::clamp(int(std::lround(x + gauss(rng) * m.lateral_sigma_px)), 0, w - 1);
+      const int sy = std::clamp(int(std::lround(y + gauss(rng) * m.lateral_sigma_px)), 0, h - 1);
+      const std::uint8_t reach = view.reach.at(sx, sy);
+      if (reach == SensorView::none) continue;
+      const float theta = view.incidence_deg.at(sx, sy);
+      const double grazing = m.grazing_min_deg + uniform(rng) * (m.grazing_max_deg - m.grazing_min_deg);
+      if (theta > grazing || reach == SensorView::shadowed) continue;
       if (uniform(rng) < m.dropout_prob) continue;
 
+      const double z = view.z_mm.at(sx, sy);
       double sigma = m.axial_sigma_mm(z);
-      if (theta > m.noisy_incidence_deg)
-        sigma *= std::cos(m.noisy_incidence_deg * kDeg) / std::cos(theta * kDeg);
+      if (theta > m.noisy_incidence_deg) sigma *= cos_noisy / std::cos(theta * kDeg);
       const double noisy = z + gauss(rng) * sigma;
       // Disparity is measured in 1/8 px: depth comes in steps.
       const double disparity = std::round(fb / noisy / m.disparity_step_px) * m.disparity_step_px;
@@ -60,19 +80,23 @@ Image<float> apply_sensor_model(const DepthTarget& cam, const DepthTarget& proj,
   // Specular highlights: blobs of missing depth where a pipe's ridge faces the camera.
   for (int y = 0; y < h; ++y) {
     for (int x = 0; x < w; ++x) {
-      const int label = cam.label.at(x, y);
-      if (label < 0 || label >= pipe_labels || cam.z_mm.at(x, y) <= 0) continue;
-      const Eigen::Vector3d p = k.unproject(x, y, cam.z_mm.at(x, y));
-      if (incidence_deg(cam.normal.at(x, y), p) > m.specular_max_incidence_deg) continue;
+      const int label = view.label.at(x, y);
+      if (label < 0 || label >= pipe_labels || view.z_mm.at(x, y) <= 0) continue;
+      if (view.incidence_deg.at(x, y) > m.specular_max_incidence_deg) continue;
       if (uniform(rng) >= m.specular_seed_prob) continue;
       const int r = 1 + int(uniform(rng) * m.specular_max_radius_px);
       for (int dy = -r; dy <= r; ++dy)
         for (int dx = -r; dx <= r; ++dx)
-          if (dx * dx + dy * dy <= r * r && out.inside(x + dx, y + dy) &&
-              cam.label.at(x + dx, y + dy) == label)
+          if (dx * dx + dy * dy <= r * r && out.inside(x + dx, y + dy) && view.label.at(x + dx, y + dy) == label)
             out.at(x + dx, y + dy) = 0;
     }
   }
+}
+
+Image<float> apply_sensor_model(const DepthTarget& cam, const DepthTarget& proj, const Intrinsics& k,
+                                const SensorModel& m, int pipe_labels, std::mt19937& rng) {
+  Image<float> out(cam.z_mm.width, cam.z_mm.height, 0.0f);
+  apply_sensor_noise(prepare_sensor_view(cam, proj, k, m), k, m, pipe_labels, rng, &out);
   return out;
 }
 

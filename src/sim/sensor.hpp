@@ -32,6 +32,21 @@ struct SensorModel {
   }
 };
 
+// What stays fixed while the scene is still: the clean depth and labels, and per pixel the
+// incidence angle of the ray and whether the projector's pattern reaches it.
+struct SensorView {
+  enum Reach : std::uint8_t { none, shadowed, lit };  // none: nothing there, or out of range
+  Image<float> z_mm;
+  Image<int> label;
+  Image<float> incidence_deg;
+  Image<std::uint8_t> reach;
+};
+SensorView prepare_sensor_view(const DepthTarget& camera, const DepthTarget& projector, const Intrinsics& k,
+                               const SensorModel& model);
+// One noisy frame of a still scene into out_mm (sized like the view); allocates nothing.
+void apply_sensor_noise(const SensorView& view, const Intrinsics& k, const SensorModel& model, int pipe_labels,
+                        std::mt19937& rng, Image<float>* out_mm);
+
 // Turns a clean render (camera view) into what the sensor reports, in mm (0 = no reading).
 // `projector` is the same scene rendered from the projector's position (camera + baseline x).
 // Pipe pixels are those with a label in [0, pipe_labels).

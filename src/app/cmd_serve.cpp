@@ -1,0 +1,179 @@
+// pipeloc serve: the long-running service. Lifecycle as a ros2_control hardware interface:
+// init (config validated, every value logged), configure (model, buffers, frame source, PLC
+// port, timing log), activate (READY to systemd), cycle until SIGTERM/SIGINT, deactivate.
+#include <poll.h>
+#include <spdlog/spdlog.h>
+
+#include <atomic>
+#include <csignal>
+#include <memory>
+
+#include "app/commands.hpp"
+#include "config/config_file.hpp"
+#include "plc/modbus_client.hpp"
+#include "plc/modbus_server.hpp"
+#include "service/cycle_runner.hpp"
+#include "service/sd_notify.hpp"
+#include "service/service.hpp"
+
+namespace pipeloc::app {
+namespace {
+
+std::atomic<bool> g_stop{false};
+extern "C" void on_signal(int) { g_stop = true; }
+
+void install_signal_handlers() {
+  struct sigaction sa {};
+  sa.sa_handler = on_signal;
+  sigemptyset(&sa.sa_mask);
+  sigaction(SIGTERM, &sa, nullptr);
+  sigaction(SIGINT, &sa, nullptr);
+  std::signal(SIGPIPE, SIG_IGN);
+}
+
+// The embedded default: a simulated bin of S-bend pipes, Modbus server on 127.0.0.1:1502.
+AppConfig embedded_default() {
+  AppConfig cfg = default_config();
+  cfg.model.preset = "sbend";
+  return cfg;
+}
+
+void log_result(const Published& p, const CycleRecord& rec) {
+  const reg::Result& r = p.result;
+  if (r.status == reg::Status::done_ok && r.pose)
+    spdlog::info("req {}: {} pose {}/{} x {:.1f} y {:.1f} z {:.1f} mm, r {:.1f} {:.1f} {:.1f} deg, score {:.3f}, cycle {} ms",
+                 p.ack_id, status_name(r.status), r.index + 1, r.count, r.pose->xyz_mm[0], r.pose->xyz_mm[1],
+                 r.pose->xyz_mm[2], r.pose->rxyz_deg[0], r.pose->rxyz_deg[1], r.pose->rxyz_deg[2], r.score,
+                 rec.command == std::uint16_t(reg::Command::locate) ? r.cycle_ms : 0);
+  else
+    spdlog::info("req {}: {} (error {} {}), cycle {} ms", p.ack_id, status_name(r.status), int(r.error),
+                 error_name(r.error), r.cycle_ms);
+}
+
+struct Options {
+  std::string config, log_dir;
+  long cycles = 0;      // stop after this many commands (0: until a signal)
+  int trigger_ms = 0;   // plc.mode "none": LOCATE every this many ms
+};
+
+int serve(const Options& opt) {
+  // init
+  AppConfig cfg = opt.config.empty() ? embedded_default() : load_config(opt.config);
+  if (!opt.log_dir.empty()) cfg.log.dir = opt.log_dir;
+  spdlog::info("pipeloc serve: config {}", cfg.path.empty() ? "(embedded default: simulated bin)" : cfg.path);
+  for (const auto& line : describe_config(cfg)) spdlog::info("config: {}", line);
+  // configure
+  const PipeModel model = load_config_model(cfg);
+  spdlog::info("model: {}: tube diameter {:.2f} mm, longest extent L {:.1f} mm, {} symmetries", model.source,
+               model.tube_diameter_mm, model.extent_mm, model.symmetries.size());
+  std::unique_ptr<FrameSource> source = open_frame_source(cfg, model);
+  spdlog::info("source: {}", source->describe());
+  Service service(cfg, model, std::move(source));
+  spdlog::info("timing log: {} (rotated at {} KiB, {} kept)", service.log().path(), cfg.log.max_file_kb,
+               cfg.log.keep_files);
+  std::unique_ptr<ModbusServer> server;
+  std::unique_ptr<PlcClientLink> client;
+  if (cfg.plc.mode == "server") {
+    server = std::make_unique<ModbusServer>(cfg.plc);
+    spdlog::info("plc: Modbus TCP server on {}:{}, registers {}..{}, {} {}", cfg.plc.address, cfg.plc.port,
+                 cfg.plc.base, cfg.plc.base + reg::kSize - 1, word_order_name(cfg.plc.encoding.order),
+                 cfg.plc.encoding.scaled_int32 ? "scaled int32" : "float32");
+  } else if (cfg.plc.mode == "client") {
+    client = std::make_unique<PlcClientLink>(cfg.plc);
+    spdlog::info("plc: polling the PLC at {}:{} every {} ms, registers from {}", cfg.plc.address, cfg.plc.port,
+                 cfg.plc.poll_ms, cfg.plc.base);
+  } else {
+    spdlog::info("plc: none; LOCATE every {} ms", opt.trigger_ms);
+  }
+  install_signal_handlers();
+  CycleRunner runner(service);
+  {
+    char rest[512];
+    std::snprintf(rest, sizeof rest, "\"source\":\"%s\",\"budget_ms\":%.1f,\"plc\":\"%s\"", cfg.source.kind.c_str(),
+                  cfg.service.budget_ms, cfg.plc.mode.c_str());
+    service.log().event("start", rest);
+  }
+  // activate
+  sd_notify_send("READY=1\nSTATUS=serving");
+  spdlog::info("ready");
+
+  using std::chrono::milliseconds;
+  const long watchdog_ms = sd_watchdog_ms();
+  auto next_heartbeat = Clock::now(), next_watchdog = Clock::now(), next_trigger = Clock::now();
+  std::uint16_t internal_req = 0;
+  bool internal_waiting = false;
+  long done = 0;
+  while (!g_stop && (opt.cycles == 0 || done < opt.cycles)) {
+    PlcRequest req;
+    bool submitted = false;
+    if (server) {
+      submitted = server->poll(20, runner.wake_fd(), &req);
+    } else {
+      pollfd pfd{runner.wake_fd(), POLLIN, 0};
+      ::poll(&pfd, 1, client ? std::min(20, cfg.plc.poll_ms) : 20);
+      if (client) {
+        submitted = client->poll(&req);
+      } else if (!internal_waiting && Clock::now() >= next_trigger) {
+        req.command = std::uint16_t(reg::Command::locate);
+        req.req_id = ++internal_req;
+        req.at = Clock::now();
+        submitted = internal_waiting = true;
+        next_trigger = req.at + milliseconds(opt.trigger_ms);
+      }
+    }
+    if (submitted) {
+      if (server) server->set_busy();
+      if (client) client->set_busy();
+      runner.submit(req);
+    }
+    Published p;
+    while (runner.take_result(&p)) {
+      if (server) server->publish(p.result, p.ack_id);
+      if (client) client->publish(p.result, p.ack_id);
+      internal_waiting = false;
+      log_result(p, service.record());
+      ++done;
+    }
+    const auto now = Clock::now();
+    const bool healthy = runner.healthy(2000);
+    if (now >= next_heartbeat) {
+      next_heartbeat = now + milliseconds(250);
+      if (healthy) {
+        if (server) server->heartbeat();
+        if (client) client->heartbeat();
+      }
+    }
+    if (watchdog_ms > 0 && now >= next_watchdog && healthy) {
+      next_watchdog = now + milliseconds(watchdog_ms / 3);
+      sd_notify_send("WATCHDOG=1");
+    }
+  }
+  // deactivate
+  sd_notify_send("STOPPING=1");
+  spdlog::info("stopping: {}", g_stop ? "signal" : "cycle count reached");
+  runner.stop();
+  Published p;
+  while (runner.take_result(&p)) {
+    if (server) server->publish(p.result, p.ack_id);
+    log_result(p, service.record());
+  }
+  service.log().event("stop", "");
+  spdlog::info("stopped after {} commands", runner.completed());
+  return 0;
+}
+
+}  // namespace
+
+void add_serve(CLI::App& app) {
+  auto opt = std::make_shared<Options>();
+  auto* cmd = app.add_subcommand("serve", "Run the service: PLC-triggered cycles on the configured frame source");
+  cmd->add_option("--config", opt->config, "TOML config (default: the embedded simulated bin, see config/demo.toml)");
+  cmd->add_option("--log-dir", opt->log_dir, "timing log folder (overrides log.dir)");
+  cmd->add_option("--cycles", opt->cycles, "stop after this many commands (default: run until SIGTERM/SIGINT)")
+      ->check(CLI::Range(0L, 1L << 40));
+  cmd->add_option("--trigger-ms", opt->trigger_ms, "plc.mode \"none\": LOCATE every this many ms")
+      ->check(CLI::Range(0, 3600000));
+  cmd->callback([opt] { exit_status() = serve(*opt); });
+}
+
+}  // namespace pipeloc::app

@@ -1,0 +1,122 @@
+#include "plc/modbus_client.hpp"
+
+#include <modbus/modbus.h>
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <cerrno>
+
+namespace pipeloc {
+
+PlcClientLink::PlcClientLink(const PlcConfig& cfg) : cfg_(cfg) {
+  ctx_ = modbus_new_tcp(cfg.address.c_str(), cfg.port);
+  if (!ctx_) throw PlcError("plc.address '" + cfg.address + ":" + std::to_string(cfg.port) + "': " + modbus_strerror(errno));
+  modbus_set_slave(ctx_, cfg.unit_id);
+  const auto response_us = std::uint32_t(cfg.byte_timeout_ms) * 5000u;
+  modbus_set_response_timeout(ctx_, response_us / 1000000u, response_us % 1000000u);
+  const auto byte_us = std::uint32_t(cfg.byte_timeout_ms) * 1000u;
+  modbus_set_byte_timeout(ctx_, byte_us / 1000000u, byte_us % 1000000u);
+  reg::write_initial(cfg.encoding, image_);
+  owe_block_ = owe_status_ = true;
+}
+
+PlcClientLink::~PlcClientLink() {
+  if (connected_) modbus_close(ctx_);
+  modbus_free(ctx_);
+}
+
+bool PlcClientLink::connect() {
+  if (modbus_connect(ctx_) < 0) {
+    spdlog::warn("plc: cannot reach the PLC at {}:{}: {}; next try in {} ms", cfg_.address, cfg_.port,
+                 modbus_strerror(errno), backoff_ms_);
+    next_attempt_ = Clock::now() + std::chrono::milliseconds(backoff_ms_);
+    backoff_ms_ = std::min(2 * backoff_ms_, cfg_.reconnect_max_ms);
+    return false;
+  }
+  connected_ = true;
+  backoff_ms_ = 100;
+  if (!have_baseline_) {  // what the PLC last saw acknowledged: a REQ_ID beyond it still runs
+    std::uint16_t ack = 0;
+    if (modbus_read_registers(ctx_, cfg_.base + reg::kAckId, 1, &ack) != 1) {
+      disconnect("reading ACK_ID");
+      return false;
+    }
+    last_req_id_ = ack;
+    have_baseline_ = true;
+  }
+  ++reconnects_;
+  spdlog::info("plc: connected to the PLC at {}:{}", cfg_.address, cfg_.port);
+  return true;
+}
+
+void PlcClientLink::disconnect(const char* why) {
+  spdlog::warn("plc: link to {}:{} lost while {}: {}", cfg_.address, cfg_.port, why, modbus_strerror(errno));
+  modbus_close(ctx_);
+  connected_ = false;
+  next_attempt_ = Clock::now() + std::chrono::milliseconds(backoff_ms_);
+}
+
+bool PlcClientLink::flush() {
+  const int base = cfg_.base;
+  if (owe_block_) {  // ERROR .. QZ in one request, so the PLC never sees half a result
+    if (modbus_write_registers(ctx_, base + reg::kError, reg::kSize - reg::kError, &image_[reg::kError]) < 0)
+      return disconnect("writing the result block"), false;
+    owe_block_ = false;
+    owe_heartbeat_ = false;
+  }
+  if (owe_status_) {
+    if (modbus_write_register(ctx_, base + reg::kStatus, image_[reg::kStatus]) < 0)
+      return disconnect("writing STATUS"), false;
+    owe_status_ = false;
+  }
+  if (owe_ack_) {
+    if (modbus_write_register(ctx_, base + reg::kAckId, image_[reg::kAckId]) < 0)
+      return disconnect("writing ACK_ID"), false;
+    owe_ack_ = false;
+  }
+  if (owe_heartbeat_) {
+    if (modbus_write_register(ctx_, base + reg::kHeartbeat, image_[reg::kHeartbeat]) < 0)
+      return disconnect("writing HEARTBEAT"), false;
+    owe_heartbeat_ = false;
+  }
+  return true;
+}
+
+bool PlcClientLink::poll(PlcRequest* req) {
+  const auto now = Clock::now();
+  if (!connected_ && (now < next_attempt_ || !connect())) return false;
+  if (!flush()) return false;
+  if (now < next_poll_) return false;
+  next_poll_ = now + std::chrono::milliseconds(cfg_.poll_ms);
+  std::uint16_t cmd_req[2];
+  if (modbus_read_registers(ctx_, cfg_.base + reg::kCmd, 2, cmd_req) != 2) {
+    disconnect("reading CMD/REQ_ID");
+    return false;
+  }
+  if (cmd_req[1] == last_req_id_) return false;
+  last_req_id_ = cmd_req[1];
+  req->command = cmd_req[0];
+  req->req_id = cmd_req[1];
+  req->at = Clock::now();
+  return true;
+}
+
+void PlcClientLink::set_busy() {
+  reg::write_busy(cfg_.encoding, image_);
+  owe_block_ = owe_status_ = true;
+  if (connected_) flush();
+}
+
+void PlcClientLink::publish(const reg::Result& r, std::uint16_t ack_id) {
+  reg::write_result(r, ack_id, cfg_.encoding, image_);
+  owe_block_ = owe_status_ = owe_ack_ = true;
+  if (connected_) flush();
+}
+
+void PlcClientLink::heartbeat() {
+  ++image_[reg::kHeartbeat];
+  owe_heartbeat_ = true;
+  if (connected_) flush();
+}
+
+}  // namespace pipeloc

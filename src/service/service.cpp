@@ -1,0 +1,183 @@
+#include "service/service.hpp"
+
+#include <cmath>
+
+#include "model/make_pipe.hpp"
+
+namespace pipeloc {
+namespace {
+
+double ms_between(Clock::time_point a, Clock::time_point b) {
+  return std::chrono::duration<double, std::milli>(b - a).count();
+}
+
+std::uint16_t clamp_u16(double v) { return std::uint16_t(std::clamp(std::lround(v), 0L, 65535L)); }
+
+Pose pose_from_rowmajor(const std::vector<double>& m16) {
+  Eigen::Matrix4d m;
+  for (int i = 0; i < 16; ++i) m(i / 4, i % 4) = m16[std::size_t(i)];
+  Pose p = Pose::Identity();
+  p.linear() = nearest_rotation(m.topLeftCorner<3, 3>());
+  p.translation() = m.topRightCorner<3, 1>();
+  return p;
+}
+
+}  // namespace
+
+PipeModel load_config_model(const AppConfig& cfg) {
+  if (!cfg.model.stl.empty()) return load_pipe_model(cfg.model.stl);
+  if (!cfg.model.preset.empty())
+    return derive_pipe_model(make_pipe(pipe_preset(cfg.model.preset)), "preset " + cfg.model.preset);
+  throw ConfigError("config '" + cfg.path + "': model: expected model.stl (the pipe's STL, mm) or model.preset");
+}
+
+Pose config_robot_from_camera(const PlcConfig& plc) {
+  return plc.robot_from_camera.size() == 16 ? pose_from_rowmajor(plc.robot_from_camera) : Pose::Identity();
+}
+
+Pose config_grasp(const ModelConfig& m, EulerConvention euler) {
+  Pose g = Pose::Identity();
+  g.linear() = rotation_from_euler_deg(m.grasp_rxyz_deg, euler);
+  g.translation() = Eigen::Vector3d(m.grasp_xyz_mm[0], m.grasp_xyz_mm[1], m.grasp_xyz_mm[2]);
+  return g;
+}
+
+Service::Service(const AppConfig& cfg, const PipeModel& model, std::unique_ptr<FrameSource> source)
+    : cfg_(cfg),
+      model_(model),
+      source_(std::move(source)),
+      locator_(model, cfg.locate, source_->intrinsics()),
+      log_(cfg.log, cfg.service.summary_every),
+      robot_from_camera_(config_robot_from_camera(cfg.plc)),
+      grasp_(config_grasp(cfg.model, cfg.plc.euler)) {
+  const Intrinsics& k = source_->intrinsics();
+  frame_.depth_mm.resize(k.width, k.height, 0.0f);
+  frame_.camera.intrinsics = k;
+  ranked_.reserve(std::size_t(cfg.locate.max_results));
+}
+
+const Pose* Service::presented() const {
+  if (result_.status != reg::Status::done_ok || index_ < 0) return nullptr;
+  return &ranked_[std::size_t(index_)].model_to_cam;
+}
+
+void Service::present(int index) {
+  index_ = index;
+  const Ranked& r = ranked_[std::size_t(index)];
+  result_.status = reg::Status::done_ok;
+  result_.error = reg::Error::none;
+  result_.index = std::uint16_t(index);
+  result_.pose = r.robot;
+  result_.score = r.score;
+  pick_pending_ = true;
+}
+
+const reg::Result& Service::run(std::uint16_t command, std::uint16_t req_id, Clock::time_point trigger) {
+  const double unix_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::system_clock::now().time_since_epoch()).count() -
+      ms_between(trigger, Clock::now());
+  record_ = CycleRecord{};
+  record_.command = command;
+  record_.req_id = req_id;
+  record_.trigger_unix_ms = unix_ms;
+  record_.budget_ms = cfg_.service.budget_ms;
+  result_.pose.reset();
+  result_.score = 0;
+  switch (command) {
+    case std::uint16_t(reg::Command::locate):
+      locate(trigger);
+      break;
+    case std::uint16_t(reg::Command::next):
+      if (index_ >= 0 && index_ + 1 < int(ranked_.size())) {
+        present(index_ + 1);
+      } else {
+        index_ = int(ranked_.size());  // past the end: NEXT keeps answering "no further result"
+        result_.status = reg::Status::error;
+        result_.error = reg::Error::no_further_result;
+      }
+      break;
+    case std::uint16_t(reg::Command::clear_error):
+      result_.status = reg::Status::ready;
+      result_.error = reg::Error::none;
+      index_ = -1;
+      ranked_.clear();
+      result_.count = 0;
+      result_.index = 0;
+      break;
+    default:
+      result_.status = reg::Status::error;
+      result_.error = reg::Error::bad_command;
+      break;
+  }
+  result_.cycles = cycles_;
+  record_.cycle = cycles_;
+  record_.status = result_.status;
+  record_.error = result_.error;
+  record_.count = int(ranked_.size());
+  record_.score = result_.status == reg::Status::done_ok ? result_.score : 0.0f;
+  record_.cycle_ms = ms_between(trigger, Clock::now());
+  if (command != std::uint16_t(reg::Command::locate)) record_.frame_age_ms = 0;
+  return result_;
+}
+
+void Service::locate(Clock::time_point trigger) {
+  ++cycles_;
+  ranked_.clear();
+  index_ = -1;
+  const auto budget = std::chrono::duration_cast<Clock::duration>(
+      std::chrono::duration<double, std::milli>(cfg_.service.budget_ms));
+  const Clock::time_point deadline = trigger + budget;
+
+  GrabStatus grab = source_->grab(trigger, deadline, &frame_);
+  if (grab == GrabStatus::ok) grab = check_frame(frame_.depth_mm, source_->intrinsics());
+  const Clock::time_point grabbed = Clock::now();
+  record_.grab = grab;
+  record_.grab_ms = ms_between(trigger, grabbed);
+  record_.frame_sequence = frame_.sequence;
+  if (grab != GrabStatus::ok) {
+    result_.status = reg::Status::error;
+    result_.error = grab == GrabStatus::sensor_unavailable ? reg::Error::sensor_unavailable : reg::Error::frame_invalid;
+  } else {
+    // The localizer stops taking up candidates a little before the deadline, so that what is
+    // in flight and the publishing still fit the budget.
+    const auto margin = std::chrono::duration_cast<Clock::duration>(
+        std::chrono::duration<double, std::milli>(std::min(5.0, 0.1 * cfg_.service.budget_ms)));
+    const LocateOutput& out = locator_.locate(frame_.depth_mm, frame_.camera, deadline - margin);
+    for (const PipeEstimate& e : out.estimates) {
+      if (!e.pickable || int(ranked_.size()) >= cfg_.locate.max_results) continue;
+      Ranked r;
+      r.model_to_cam = e.model_to_cam;
+      r.robot = to_robot(e.model_to_cam, robot_from_camera_, grasp_, cfg_.plc.euler);
+      r.score = e.score;
+      ranked_.push_back(r);
+    }
+    record_.stages = out.times;
+    record_.candidates = int(out.traces.size());
+    for (const CandidateTrace& t : out.traces) record_.tried += t.outcome != CandidateOutcome::budget;
+    record_.accepted = int(out.estimates.size());
+    record_.budget_exhausted = out.budget_exhausted;
+    if (!ranked_.empty()) {
+      present(0);
+    } else if (out.budget_exhausted) {
+      result_.status = reg::Status::error;
+      result_.error = reg::Error::budget_exhausted;
+    } else {
+      result_.status = reg::Status::done_none;
+      result_.error = reg::Error::none;
+    }
+  }
+  const Clock::time_point done = Clock::now();
+  result_.count = std::uint16_t(ranked_.size());
+  if (ranked_.empty()) result_.index = 0;
+  result_.cycle_ms = clamp_u16(ms_between(trigger, done));
+  record_.frame_age_ms = grab == GrabStatus::ok ? ms_between(frame_.captured, done) : 0.0;
+  result_.frame_age_ms = clamp_u16(record_.frame_age_ms);
+}
+
+void Service::after_publish() {
+  if (!pick_pending_) return;
+  pick_pending_ = false;
+  if (const Pose* p = presented()) source_->picked(*p);
+}
+
+}  // namespace pipeloc

@@ -1,0 +1,74 @@
+// The service's cycle, in the lifecycle of a ros2_control hardware interface: the constructor
+// validates and sizes everything (init + configure: model, locator buffers, frame source,
+// timing log) and throws if anything is wrong; run() is the real-time part: one PLC command in,
+// the register contents out, no allocation after the first LOCATE and no exceptions.
+#pragma once
+
+#include <atomic>
+#include <memory>
+#include <vector>
+
+#include "config/config_file.hpp"
+#include "locate/locator.hpp"
+#include "plc/register_map.hpp"
+#include "service/cycle.hpp"
+#include "service/frame_source.hpp"
+#include "service/timing_log.hpp"
+
+namespace pipeloc {
+
+// The pipe model of a config: model.stl, or model.preset. Throws naming the key.
+PipeModel load_config_model(const AppConfig& cfg);
+// robot_from_camera and the grasp offset of a config (identity when not given).
+Pose config_robot_from_camera(const PlcConfig& plc);
+Pose config_grasp(const ModelConfig& model, EulerConvention euler);
+
+class Service {
+ public:
+  Service(const AppConfig& cfg, const PipeModel& model, std::unique_ptr<FrameSource> source);
+
+  // Runs the PLC command `command` (CMD register) submitted at `trigger`:
+  // LOCATE captures a frame taken after the trigger and localizes within service.budget_ms;
+  // NEXT presents the next pose of the last LOCATE; CLEAR_ERROR returns to READY.
+  const reg::Result& run(std::uint16_t command, std::uint16_t req_id, Clock::time_point trigger);
+  // After the result is published: the simulated bin loses the pipe just handed out.
+  void after_publish();
+  // Stops a running cycle at its next check (shutdown).
+  void cancel_cycles(const std::atomic<bool>* flag) { locator_.set_cancel_flag(flag); }
+
+  double budget_ms() const { return cfg_.service.budget_ms; }
+  const CycleRecord& record() const { return record_; }
+  const reg::Result& result() const { return result_; }
+  const Frame& frame() const { return frame_; }
+  const LocateOutput& output() const { return locator_.output(); }
+  const Locator& locator() const { return locator_; }
+  FrameSource& source() { return *source_; }
+  TimingLog& log() { return log_; }
+  // The pose (model -> camera) presented now, when the status is DONE_OK.
+  const Pose* presented() const;
+
+ private:
+  struct Ranked {
+    Pose model_to_cam = Pose::Identity();
+    RobotPose robot;
+    float score = 0;
+  };
+  void locate(Clock::time_point trigger);
+  void present(int index);
+
+  const AppConfig& cfg_;
+  const PipeModel& model_;
+  std::unique_ptr<FrameSource> source_;
+  Locator locator_;
+  Frame frame_;
+  TimingLog log_;
+  Pose robot_from_camera_, grasp_;
+  std::vector<Ranked> ranked_;  // pickable poses of the last LOCATE, best first
+  int index_ = -1;
+  bool pick_pending_ = false;
+  std::uint32_t cycles_ = 0;
+  reg::Result result_;
+  CycleRecord record_;
+};
+
+}  // namespace pipeloc

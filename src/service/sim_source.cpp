@@ -1,0 +1,82 @@
+#include "service/sim_source.hpp"
+
+#include <cstdio>
+#include <thread>
+
+#include "score/mssd.hpp"
+#include "sim/pile.hpp"
+
+namespace pipeloc {
+namespace {
+// A pick takes the pipe the pose was computed for when it is within the scorer's looser bound.
+constexpr double kPickMatchMm = 10.0;
+}  // namespace
+
+SimSource::SimSource(const PipeModel& model, const SimSourceConfig& cfg)
+    : model_(model), cfg_(cfg), rng_(std::uint32_t(cfg.seed)) {
+  params_.pile.pipes = cfg.pipes;
+  params_.max_tilt_deg = cfg.tilt_deg;
+  for (std::size_t i = 0; i < model.mesh.vertices.size(); i += 4) vertices_.push_back(model.mesh.vertices[i].cast<double>());
+  fill_bin();
+}
+
+void SimSource::fill_bin() {
+  pile_ = build_pile(model_, params_.pile, rng_);
+  world_to_cam_ = draw_camera(params_, rng_);
+  ++bins_;
+  render();
+}
+
+void SimSource::render() {
+  DepthTarget camera, projector;
+  render_views(model_, pile_, world_to_cam_, params_, &camera, &projector);
+  view_ = prepare_sensor_view(camera, projector, params_.intrinsics, params_.sensor);
+}
+
+GrabStatus SimSource::grab(Clock::time_point after, Clock::time_point, Frame* out) {
+  // The simulated sensor exposes now: the frame is always newer than the trigger.
+  while (Clock::now() <= after) std::this_thread::yield();
+  apply_sensor_noise(view_, params_.intrinsics, params_.sensor, int(pile_.size()), rng_, &out->depth_mm);
+  out->camera.intrinsics = params_.intrinsics;
+  out->camera.depth_scale = 1.0;
+  out->camera.world_to_cam = world_to_cam_;
+  out->captured = Clock::now();
+  out->sequence = ++sequence_;
+  out->scene_id = bins_;
+  out->im_id = int(sequence_);
+  return GrabStatus::ok;
+}
+
+void SimSource::picked(const Pose& model_to_cam) {
+  int best = -1;
+  double best_err = kPickMatchMm;
+  for (std::size_t i = 0; i < pile_.size(); ++i) {
+    const double err = mssd(vertices_, model_to_cam, world_to_cam_ * pile_[i], model_.symmetries, best_err);
+    if (err <= best_err) {
+      best_err = err;
+      best = int(i);
+    }
+  }
+  if (best < 0) return;  // a pose off every pipe: the gripper closes on nothing
+  pile_.erase(pile_.begin() + best);
+  if (pile_.empty() && cfg_.refill)
+    fill_bin();
+  else
+    render();
+}
+
+std::vector<Pose> SimSource::pipes_in_camera() const {
+  std::vector<Pose> out;
+  for (const Pose& p : pile_) out.push_back(world_to_cam_ * p);
+  return out;
+}
+
+std::string SimSource::describe() const {
+  char text[256];
+  std::snprintf(text, sizeof text, "sim: %d pipes of %s per bin, seed %d, camera tilt up to %.1f deg, %dx%d, %s",
+                cfg_.pipes, model_.source.c_str(), cfg_.seed, cfg_.tilt_deg, params_.intrinsics.width,
+                params_.intrinsics.height, cfg_.refill ? "refilled when empty" : "not refilled");
+  return text;
+}
+
+}  // namespace pipeloc

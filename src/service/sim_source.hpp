@@ -1,0 +1,44 @@
+// The embedded default source: the project's simulator. It keeps a pile in a bin, renders it
+// once per change of the pile and draws fresh sensor noise for every frame. A pipe handed out
+// and picked is taken out of the bin, so a run empties a bin as a real cell would; an empty
+// bin is refilled with a new pile (source.sim.refill).
+#pragma once
+
+#include <random>
+#include <vector>
+
+#include "service/frame_source.hpp"
+#include "sim/scene.hpp"
+
+namespace pipeloc {
+
+class SimSource : public FrameSource {
+ public:
+  SimSource(const PipeModel& model, const SimSourceConfig& cfg);
+  const char* kind() const override { return "sim"; }
+  const Intrinsics& intrinsics() const override { return params_.intrinsics; }
+  GrabStatus grab(Clock::time_point after, Clock::time_point deadline, Frame* out) override;
+  void picked(const Pose& model_to_cam) override;
+  std::string describe() const override;
+
+  // Ground truth for tests and the demo: the pipes still in the bin, model -> camera.
+  std::vector<Pose> pipes_in_camera() const;
+  int bins_filled() const { return bins_; }
+
+ private:
+  void fill_bin();
+  void render();
+
+  const PipeModel& model_;
+  SimSourceConfig cfg_;
+  SceneParams params_;
+  std::mt19937 rng_;
+  std::vector<Eigen::Vector3d> vertices_;  // for matching a picked pose to a pipe
+  std::vector<Pose> pile_;                 // model -> world
+  Pose world_to_cam_ = Pose::Identity();
+  SensorView view_;
+  std::uint64_t sequence_ = 0;
+  int bins_ = 0;
+};
+
+}  // namespace pipeloc

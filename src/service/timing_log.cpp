@@ -1,0 +1,147 @@
+#include "service/timing_log.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cstring>
+#include <filesystem>
+#include <stdexcept>
+
+#include "service/cycle.hpp"
+
+namespace pipeloc {
+namespace {
+
+double unix_ms_now() {
+  return std::chrono::duration<double, std::milli>(std::chrono::system_clock::now().time_since_epoch()).count();
+}
+
+double quantile_sorted(const std::vector<double>& v, double q) {
+  return v.empty() ? 0.0 : v[std::size_t(q * double(v.size() - 1) + 0.5)];
+}
+
+}  // namespace
+
+const char* status_name(reg::Status s) {
+  switch (s) {
+    case reg::Status::ready:
+      return "READY";
+    case reg::Status::busy:
+      return "BUSY";
+    case reg::Status::done_ok:
+      return "DONE_OK";
+    case reg::Status::done_none:
+      return "DONE_NONE";
+    case reg::Status::error:
+      return "ERROR";
+  }
+  return "?";
+}
+
+const char* error_name(reg::Error e) {
+  switch (e) {
+    case reg::Error::none:
+      return "none";
+    case reg::Error::sensor_unavailable:
+      return "sensor_unavailable";
+    case reg::Error::frame_invalid:
+      return "frame_invalid";
+    case reg::Error::budget_exhausted:
+      return "budget_exhausted";
+    case reg::Error::config_model:
+      return "config_model";
+    case reg::Error::bad_command:
+      return "bad_command";
+    case reg::Error::no_further_result:
+      return "no_further_result";
+  }
+  return "?";
+}
+
+TimingLog::TimingLog(const LogConfig& cfg, int summary_every) : cfg_(cfg), summary_every_(summary_every) {
+  std::error_code ec;
+  std::filesystem::create_directories(cfg.dir, ec);
+  path_ = (std::filesystem::path(cfg.dir) / "timing.jsonl").string();
+  file_ = std::fopen(path_.c_str(), "a");
+  if (!file_) throw std::runtime_error("log.dir '" + cfg.dir + "': cannot write " + path_ + ": " + std::strerror(errno));
+  bytes_ = std::ftell(file_);
+  window_.reserve(std::size_t(summary_every));
+  sorted_.reserve(std::size_t(summary_every));
+}
+
+TimingLog::~TimingLog() {
+  if (file_) std::fclose(file_);
+}
+
+void TimingLog::put(const char* line, int length) {
+  if (length <= 0) return;
+  length = std::min(length, int(sizeof(line_)) - 1);
+  if (!file_) return;  // a failed rotation: the log is lost, the cycle is not
+  std::fwrite(line, 1, std::size_t(length), file_);
+  std::fflush(file_);
+  bytes_ += length;
+  if (bytes_ > long(cfg_.max_file_kb) * 1024) rotate();
+}
+
+void TimingLog::rotate() {
+  std::fclose(file_);
+  char from[4096], to[4096];
+  for (int i = cfg_.keep_files; i >= 1; --i) {
+    if (i == 1)
+      std::snprintf(from, sizeof from, "%s", path_.c_str());
+    else
+      std::snprintf(from, sizeof from, "%s.%d", path_.c_str(), i - 1);
+    std::snprintf(to, sizeof to, "%s.%d", path_.c_str(), i);
+    std::rename(from, to);  // the oldest is overwritten
+  }
+  file_ = std::fopen(path_.c_str(), "w");
+  bytes_ = 0;
+}
+
+void TimingLog::event(const char* name, const char* rest) {
+  const int n = std::snprintf(line_, sizeof line_, "{\"event\":\"%s\",\"unix_ms\":%.0f%s%s}\n", name, unix_ms_now(),
+                              *rest ? "," : "", rest);
+  put(line_, n);
+}
+
+TimingLog::Summary TimingLog::summary() const {
+  Summary s;
+  sorted_.assign(window_.begin(), window_.end());
+  std::sort(sorted_.begin(), sorted_.end());
+  s.cycles = int(sorted_.size());
+  s.p50 = quantile_sorted(sorted_, 0.50);
+  s.p95 = quantile_sorted(sorted_, 0.95);
+  s.p99 = quantile_sorted(sorted_, 0.99);
+  s.max = sorted_.empty() ? 0.0 : sorted_.back();
+  return s;
+}
+
+void TimingLog::write(const CycleRecord& r) {
+  const StageTimes& t = r.stages;
+  const int n = std::snprintf(
+      line_, sizeof line_,
+      "{\"event\":\"cycle\",\"cycle\":%llu,\"cmd\":%u,\"req_id\":%u,\"trigger_unix_ms\":%.1f,\"frame\":%llu,"
+      "\"grab\":\"%s\",\"grab_ms\":%.2f,\"frame_age_ms\":%.2f,\"zbuffer_ms\":%.2f,\"normals_ms\":%.2f,"
+      "\"regions_ms\":%.2f,\"axis_ms\":%.2f,\"ridge_icp_ms\":%.2f,\"refine_ms\":%.2f,\"verify_ms\":%.2f,"
+      "\"locate_ms\":%.2f,\"cycle_ms\":%.2f,\"budget_ms\":%.1f,\"budget_use\":%.3f,\"budget_exhausted\":%s,"
+      "\"candidates\":%d,\"tried\":%d,\"accepted\":%d,\"count\":%d,\"score\":%.4f,\"status\":\"%s\","
+      "\"error\":\"%s\"}\n",
+      (unsigned long long)r.cycle, unsigned(r.command), unsigned(r.req_id), r.trigger_unix_ms,
+      (unsigned long long)r.frame_sequence, grab_status_name(r.grab), r.grab_ms, r.frame_age_ms, t.zbuffer_ms,
+      t.normals_ms, t.regions_ms, t.axis_ms, t.ridge_icp_ms, t.refine_ms, t.verify_ms, t.total_ms, r.cycle_ms,
+      r.budget_ms, r.budget_ms > 0 ? r.cycle_ms / r.budget_ms : 0.0, r.budget_exhausted ? "true" : "false",
+      r.candidates, r.tried, r.accepted, r.count, double(r.score), status_name(r.status), error_name(r.error));
+  put(line_, n);
+  if (r.command != std::uint16_t(reg::Command::locate)) return;
+  window_.push_back(r.cycle_ms);
+  if (int(window_.size()) < summary_every_) return;
+  const Summary s = summary();
+  char rest[256];
+  std::snprintf(rest, sizeof rest,
+                "\"cycles\":%d,\"up_to_cycle\":%llu,\"cycle_ms_p50\":%.2f,\"cycle_ms_p95\":%.2f,"
+                "\"cycle_ms_p99\":%.2f,\"cycle_ms_max\":%.2f",
+                s.cycles, (unsigned long long)r.cycle, s.p50, s.p95, s.p99, s.max);
+  event("summary", rest);
+  window_.clear();
+}
+
+}  // namespace pipeloc
