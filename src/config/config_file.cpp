@@ -193,6 +193,7 @@ void read_source(const std::string& file, const toml::table* t, std::vector<std:
   sim.integer("seed", &c->sim.seed, 0, 1 << 30, "");
   sim.real("tilt_deg", &c->sim.tilt_deg, 0, 45, "deg");
   sim.boolean("refill", &c->sim.refill);
+  sim.text("truth_file", &c->sim.truth_file);
   sim.finish();
 
   Section rp(file, "source.replay", sub("replay"), eff);

@@ -29,6 +29,7 @@ struct SimSourceConfig {
   int seed = 1;
   double tilt_deg = 0;  // camera tilt from vertical, drawn in [0, this] per bin
   bool refill = true;   // a new bin when the last pipe has been picked
+  std::string truth_file;  // if set: one JSON line per frame with every pipe's true pose (tests, demo)
 };
 
 struct ReplaySourceConfig {

@@ -190,6 +190,10 @@ void Locator::work_candidate(int c, Worker& wk, const Image<float>& depth, const
             [](const RidgeFit& x, const RidgeFit& y) { return x.cost_mm < y.cost_mm; });
   const int keep = std::min(int(wk.fits.size()), cfg_.icp_continued_states);
   for (int i = 0; i < keep; ++i) {
+    if (out_of_time(deadline)) {
+      wk.times.ridge_icp_ms += ms_since(t);
+      return;
+    }
     RidgeFit& f = wk.fits[std::size_t(i)];
     const int done = f.iterations;
     f = ridge_icp(lm_, f.pose, ridge, trace.ridge_count, trace.axis.axis, cfg_,

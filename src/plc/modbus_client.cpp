@@ -35,14 +35,25 @@ bool PlcClientLink::connect() {
   }
   connected_ = true;
   backoff_ms_ = 100;
-  if (!have_baseline_) {  // what the PLC last saw acknowledged: a REQ_ID beyond it still runs
-    std::uint16_t ack = 0;
-    if (modbus_read_registers(ctx_, cfg_.base + reg::kAckId, 1, &ack) != 1) {
-      disconnect("reading ACK_ID");
-      return false;
-    }
-    last_req_id_ = ack;
-    have_baseline_ = true;
+  // Where the PLC stands: a result owed is written only if the PLC still waits for exactly it
+  // (a restarted PLC must not see an old ACK_ID with an old pose); a REQ_ID it set while the
+  // link was down (REQ_ID != its ACK_ID, CMD set) still runs; otherwise its REQ_ID is the baseline.
+  std::uint16_t head[reg::kAckId + 1];
+  if (modbus_read_registers(ctx_, cfg_.base, reg::kAckId + 1, head) != reg::kAckId + 1) {
+    disconnect("reading CMD..ACK_ID");
+    return false;
+  }
+  const std::uint16_t plc_cmd = head[reg::kCmd], plc_req = head[reg::kReqId], plc_ack = head[reg::kAckId];
+  if (owe_ack_ && image_[reg::kAckId] == plc_req) {
+    last_req_id_ = plc_req;
+  } else {
+    if (owe_ack_) spdlog::warn("plc: result for REQ_ID {} dropped: the PLC moved on", image_[reg::kAckId]);
+    owe_ack_ = false;
+    reg::Result none;
+    none.status = reg::Status::ready;
+    reg::write_result(none, plc_ack, cfg_.encoding, image_);
+    owe_block_ = owe_status_ = true;
+    last_req_id_ = (plc_req != plc_ack && plc_cmd != 0) ? plc_ack : plc_req;
   }
   ++reconnects_;
   spdlog::info("plc: connected to the PLC at {}:{}", cfg_.address, cfg_.port);

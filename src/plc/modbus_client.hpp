@@ -38,7 +38,6 @@ class PlcClientLink {
   PlcConfig cfg_;
   modbus_t* ctx_ = nullptr;
   bool connected_ = false;
-  bool have_baseline_ = false;
   std::uint16_t last_req_id_ = 0;
   std::uint16_t image_[reg::kSize] = {};
   bool owe_block_ = false, owe_status_ = false, owe_ack_ = false, owe_heartbeat_ = false;

@@ -4,6 +4,7 @@
 #include <spdlog/spdlog.h>
 
 #include <cmath>
+#include <thread>
 
 namespace pipeloc {
 
@@ -84,6 +85,7 @@ bool OpenNi2Source::open(std::string* why) {
   }
   intrinsics_ = k;
   device_name_ = d.device.getDeviceInfo().getName();
+  if (device_name_.empty()) device_name_ = d.device.getDeviceInfo().getUri();
   d.open = true;
   return true;
 }
@@ -93,6 +95,9 @@ void OpenNi2Source::close() {
   if (!d.open) return;
   d.frame.release();
   d.depth.stop();
+  // Debian's OpenNI2 2.2.0.33: the Dummy driver's frame thread does not stop with the stream and
+  // can call into a destroyed one (a crash, reproduced); a few frame periods let it finish.
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));
   d.depth.destroy();
   d.device.close();
   d.open = false;

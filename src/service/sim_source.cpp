@@ -17,7 +17,27 @@ SimSource::SimSource(const PipeModel& model, const SimSourceConfig& cfg)
   params_.pile.pipes = cfg.pipes;
   params_.max_tilt_deg = cfg.tilt_deg;
   for (std::size_t i = 0; i < model.mesh.vertices.size(); i += 4) vertices_.push_back(model.mesh.vertices[i].cast<double>());
+  if (!cfg.truth_file.empty() && !(truth_ = std::fopen(cfg.truth_file.c_str(), "w")))
+    throw SourceError("source.sim.truth_file '" + cfg.truth_file + "': cannot write");
   fill_bin();
+}
+
+SimSource::~SimSource() {
+  if (truth_) std::fclose(truth_);
+}
+
+void SimSource::write_truth(std::uint64_t frame) {
+  // {"frame": N, "model_to_cam": [[R row-major (9), t mm (3)], ...]}; fprintf allocates nothing.
+  std::fprintf(truth_, "{\"frame\":%llu,\"bin\":%d,\"model_to_cam\":[", (unsigned long long)frame, bins_);
+  for (std::size_t i = 0; i < pile_.size(); ++i) {
+    const Pose p = world_to_cam_ * pile_[i];
+    std::fprintf(truth_, "%s[", i ? "," : "");
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) std::fprintf(truth_, "%.9f,", p.linear()(r, c));
+    std::fprintf(truth_, "%.4f,%.4f,%.4f]", p.translation().x(), p.translation().y(), p.translation().z());
+  }
+  std::fprintf(truth_, "]}\n");
+  std::fflush(truth_);
 }
 
 void SimSource::fill_bin() {
@@ -44,6 +64,7 @@ GrabStatus SimSource::grab(Clock::time_point after, Clock::time_point, Frame* ou
   out->sequence = ++sequence_;
   out->scene_id = bins_;
   out->im_id = int(sequence_);
+  if (truth_) write_truth(sequence_);
   return GrabStatus::ok;
 }
 

@@ -4,6 +4,7 @@
 // bin is refilled with a new pile (source.sim.refill).
 #pragma once
 
+#include <cstdio>
 #include <random>
 #include <vector>
 
@@ -15,6 +16,7 @@ namespace pipeloc {
 class SimSource : public FrameSource {
  public:
   SimSource(const PipeModel& model, const SimSourceConfig& cfg);
+  ~SimSource() override;
   const char* kind() const override { return "sim"; }
   const Intrinsics& intrinsics() const override { return params_.intrinsics; }
   GrabStatus grab(Clock::time_point after, Clock::time_point deadline, Frame* out) override;
@@ -28,6 +30,7 @@ class SimSource : public FrameSource {
  private:
   void fill_bin();
   void render();
+  void write_truth(std::uint64_t frame);
 
   const PipeModel& model_;
   SimSourceConfig cfg_;
@@ -39,6 +42,7 @@ class SimSource : public FrameSource {
   SensorView view_;
   std::uint64_t sequence_ = 0;
   int bins_ = 0;
+  std::FILE* truth_ = nullptr;
 };
 
 }  // namespace pipeloc

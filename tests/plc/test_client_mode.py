@@ -1,0 +1,97 @@
+"""Client mode: the service polls a PLC (a pymodbus server) for CMD/REQ_ID and writes the result
+block, STATUS and ACK_ID there. The PLC goes away and comes back; the service reconnects and
+serves the next request; the heartbeat moves again.
+usage: test_client_mode.py PIPELOC_BINARY PORT"""
+import os
+import socket
+import subprocess
+import sys
+import time
+import unittest
+
+from pymodbus.client import ModbusTcpClient
+
+from plc_harness import *  # noqa: F401,F403
+
+BINARY, PORT = sys.argv[1], int(sys.argv[2])
+HERE = os.path.dirname(os.path.abspath(__file__))
+
+
+def start_plc():
+    proc = subprocess.Popen([sys.executable, os.path.join(HERE, "fake_plc.py"), str(PORT)])
+    end = time.time() + 20
+    while time.time() < end:
+        try:
+            socket.create_connection(("127.0.0.1", PORT), timeout=0.2).close()
+            return proc
+        except OSError:
+            time.sleep(0.05)
+    proc.kill()
+    raise AssertionError("the fake PLC did not start")
+
+
+class PlcSide:
+    def __init__(self):
+        self.c = ModbusTcpClient("127.0.0.1", port=PORT, timeout=3)
+        assert self.c.connect()
+
+    def read(self):
+        rr = self.c.read_holding_registers(0, SIZE, slave=1)
+        assert not rr.isError(), rr
+        return rr.registers
+
+    def command(self, cmd, req_id, timeout=30):
+        assert not self.c.write_registers(CMD, [cmd, req_id], slave=1).isError()
+        end = time.time() + timeout
+        while time.time() < end:
+            regs = self.read()
+            if regs[ACK_ID] == req_id:
+                return regs
+            time.sleep(0.02)
+        raise AssertionError(f"no ACK_ID {req_id}")
+
+
+class ClientMode(unittest.TestCase):
+    def test_poll_and_reconnect(self):
+        plc_proc = start_plc()
+        svc = Service(BINARY, PORT, mode="client", extra_toml="", seed=7)
+        try:
+            plc = PlcSide()
+            regs = plc.command(LOCATE, 1)
+            self.assertIn(regs[STATUS], (DONE_OK, DONE_NONE))
+            if regs[STATUS] == DONE_OK:
+                err = svc.best_error(u32(regs, CYCLES), decode_pose(regs))
+                print(f"client mode: pose {err:.2f} mm from a true pipe")
+                self.assertLessEqual(err, 10.0)
+            beat = plc.read()[HEARTBEAT]
+            time.sleep(0.6)
+            self.assertGreater(plc.read()[HEARTBEAT], beat)
+            plc.c.close()
+
+            # The PLC goes away ...
+            plc_proc.kill()
+            plc_proc.wait()
+            time.sleep(1.5)
+            self.assertIsNone(svc.proc.poll(), "the service keeps running without its PLC")
+            # ... and comes back (a restarted PLC: its registers start from zero again).
+            plc_proc = start_plc()
+            plc = PlcSide()
+            end = time.time() + 15
+            while time.time() < end and plc.read()[HEARTBEAT] == 0:
+                time.sleep(0.1)
+            self.assertGreater(plc.read()[HEARTBEAT], 0, "the heartbeat tells the PLC the link is back")
+            regs = plc.read()  # a restarted PLC's zeros are no command: nothing runs, no error
+            self.assertEqual((regs[STATUS], regs[ERROR], regs[ACK_ID]), (READY, 0, 0))
+            regs = plc.command(LOCATE, 2)
+            self.assertIn(regs[STATUS], (DONE_OK, DONE_NONE))
+            plc.c.close()
+            self.assertIn("lost", svc.output())
+        finally:
+            code = svc.stop()
+            plc_proc.kill()
+            plc_proc.wait()
+        self.assertEqual(code, 0, svc.output())
+
+
+if __name__ == "__main__":
+    unittest.main(argv=sys.argv[:1], verbosity=2)

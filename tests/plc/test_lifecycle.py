@@ -1,0 +1,104 @@
+"""The service's lifecycle from outside: bad start-up input gives a clear message and a non-zero
+exit; systemd's notify protocol (READY, WATCHDOG, STOPPING) over a real datagram socket; SIGTERM
+during a cycle ends the process cleanly within a second; the OpenNI2 Dummy device as a source.
+usage: test_lifecycle.py PIPELOC_BINARY PORT"""
+import os
+import signal
+import socket
+import subprocess
+import sys
+import tempfile
+import time
+import unittest
+
+from plc_harness import BUSY, LOCATE, STATUS, Plc, Service
+
+BINARY, PORT = sys.argv[1], int(sys.argv[2])
+
+
+def serve_with(config_text, *args, timeout=60):
+    d = tempfile.mkdtemp(prefix="pipeloc-life-")
+    path = os.path.join(d, "c.toml")
+    with open(path, "w") as f:
+        f.write(config_text)
+    out = subprocess.run([BINARY, "serve", "--config", path, "--log-dir", os.path.join(d, "log")] + list(args),
+                         capture_output=True, text=True, timeout=timeout)
+    return out.returncode, out.stdout + out.stderr, path
+
+
+class StartUp(unittest.TestCase):
+    def test_bad_input_stops_with_a_message(self):
+        cases = [
+            ("[model]\npreset = \"sbend\"\n[plc]\nbase = 70000\n", "plc.base"),
+            ("[model]\npreset = \"sbend\"\n[source]\nkind = \"usb\"\n", "source.kind"),
+            ("[model]\nstl = \"missing.stl\"\n", "missing.stl"),
+            ("[plc]\nmode = \"none\"\n", "model"),
+            ("[model]\npreset = \"sbend\"\n[source]\nkind = \"replay\"\n[source.replay]\npath = \"nowhere\"\n",
+             "nowhere"),
+            ("[model]\npreset = \"sbend\"\n[source]\nkind = \"openni2\"\n[source.openni2]\nuri = \"no-such-device\"\n",
+             "no-such-device"),
+            ("[model]\npreset = \"sbend\"\n[locate]\nthreads = 0\n", "locate.threads"),
+            ("[model]\npreset = \"sbend\"\nmodel = 3\n", "model.model"),
+        ]
+        for text, named in cases:
+            code, out, path = serve_with(text)
+            self.assertNotEqual(code, 0, text)
+            self.assertIn(named, out, text)
+            self.assertNotIn("Segmentation", out)
+        with socket.socket() as taken:  # a port somebody else holds
+            taken.bind(("127.0.0.1", PORT))
+            taken.listen(1)
+            code, out, _ = serve_with(f"[model]\npreset = \"sbend\"\n[plc]\nport = {PORT}\n")
+            self.assertNotEqual(code, 0)
+            self.assertIn(f"cannot listen on 127.0.0.1:{PORT}", out)
+
+    def test_openni2_dummy_as_source(self):
+        code, out, _ = serve_with("[model]\npreset = \"sbend\"\n[source]\nkind = \"openni2\"\n"
+                                  "[source.openni2]\nuri = \"Dummy\"\n[plc]\nmode = \"none\"\n", "--cycles", "3")
+        self.assertEqual(code, 0, out)
+        self.assertIn("320x240", out)
+        # The Dummy's frames hold a few hundred readings: the service says so, it does not guess.
+        self.assertEqual(out.count("frame_invalid"), 3, out)
+
+
+class Running(unittest.TestCase):
+    def test_systemd_notify_and_sigterm_during_a_cycle(self):
+        notify_path = os.path.join(tempfile.mkdtemp(prefix="pipeloc-notify-"), "notify.sock")
+        sock = socket.socket(socket.AF_UNIX, socket.SOCK_DGRAM)
+        sock.bind(notify_path)
+        sock.settimeout(30)
+        env = dict(os.environ, NOTIFY_SOCKET=notify_path, WATCHDOG_USEC="300000")
+        # A slow configuration: many pipes, every start run to the end, many hypotheses.
+        slow = ("[locate]\ninitial_rotations = 12\nicp_continued_states = 24\nicp_max_iterations = 200\n"
+                "verify_hypotheses = 24\n")
+        svc = Service(BINARY, PORT, extra_toml=slow, pipes=40, budget_ms=20000, env=env)
+        try:
+            messages = []
+            while not any("READY=1" in m for m in messages):
+                messages.append(sock.recv(4096).decode())
+            while not any("WATCHDOG=1" in m for m in messages):
+                messages.append(sock.recv(4096).decode())
+            svc.wait_listening()
+            plc = Plc(PORT)
+            plc.req_id += 1
+            plc.client.write_registers(0, [LOCATE, plc.req_id], slave=1)
+            time.sleep(0.3)
+            self.assertEqual(plc.read()[STATUS], BUSY, "the cycle is still running")
+            plc.close()
+            start = time.time()
+            svc.proc.send_signal(signal.SIGTERM)
+            code = svc.proc.wait(timeout=5)
+            took = time.time() - start
+            print(f"SIGTERM during a cycle: exit {code} after {took * 1000:.0f} ms")
+            self.assertEqual(code, 0)
+            self.assertLess(took, 1.0)
+            sock.settimeout(1)
+            while not any("STOPPING=1" in m for m in messages):
+                messages.append(sock.recv(4096).decode())
+        finally:
+            svc.stop()
+            sock.close()
+
+
+if __name__ == "__main__":
+    unittest.main(argv=sys.argv[:1], verbosity=2)

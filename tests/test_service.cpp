@@ -1,0 +1,334 @@
+// The service's layers below the PLC link: config sections, frame sources, the cycle with its
+// budget and results, the timing log. Data come from the project's simulator.
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+#include <thread>
+
+#include "io/png.hpp"
+#include "model/make_pipe.hpp"
+#include "score/mssd.hpp"
+#include "service/openni2_source.hpp"
+#include "service/replay_source.hpp"
+#include "service/service.hpp"
+#include "service/sim_source.hpp"
+#include "sim/dataset_writer.hpp"
+#include "test_util.hpp"
+
+namespace pipeloc {
+namespace {
+
+const PipeModel& sbend() {
+  static const PipeModel m = derive_pipe_model(make_pipe(pipe_preset("sbend")), "sbend");
+  return m;
+}
+
+AppConfig config_from(const test::TempDir& dir, const std::string& text) {
+  test::write_text(dir.file("c.toml"), text);
+  return load_config(dir.file("c.toml"));
+}
+
+std::string config_error(const test::TempDir& dir, const std::string& text) {
+  try {
+    config_from(dir, text);
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(ServiceConfig, EveryWrongKeyNamesFileAndKey) {
+  test::TempDir dir;
+  const struct {
+    const char* toml;
+    const char* key;
+  } cases[] = {
+      {"[plc]\nport = 0\n", "plc.port"},
+      {"[plc]\nword_order = \"ABDC\"\n", "plc.word_order"},
+      {"[plc]\nmode = \"master\"\n", "plc.mode"},
+      {"[plc]\nrobot_from_camera = [1, 0, 0]\n", "plc.robot_from_camera"},
+      {"[plc]\npoll = 5\n", "plc.poll"},
+      {"[service]\nbudget_ms = \"fast\"\n", "service.budget_ms"},
+      {"[source]\nkind = \"kinect\"\n", "source.kind"},
+      {"[source]\nkind = \"replay\"\n", "source.replay.path"},
+      {"[source.sim]\npipes = 0\n", "source.sim.pipes"},
+      {"[source.usb]\nx = 1\n", "source.usb"},
+      {"[log]\nkeep_files = -1\n", "log.keep_files"},
+      {"[model]\nstl = \"a.stl\"\npreset = \"u\"\n", "model"},
+      {"[model]\npreset = \"spiral\"\n", "model.preset"},
+      {"[camera]\nfx = 1\n", "camera"},
+  };
+  for (const auto& c : cases) {
+    const std::string msg = config_error(dir, c.toml);
+    EXPECT_NE(msg.find(dir.file("c.toml")), std::string::npos) << c.toml << " -> " << msg;
+    EXPECT_NE(msg.find(std::string(c.key) + ":"), std::string::npos) << c.toml << " -> " << msg;
+  }
+  EXPECT_NE(config_error(dir, "[plc\n").find("line 1"), std::string::npos);
+}
+
+TEST(ServiceConfig, DefaultsAreListedAndPathsResolveBesideTheFile) {
+  test::TempDir dir;
+  const AppConfig cfg = config_from(dir, "[model]\nstl = \"pipe.stl\"\n[source]\nkind = \"replay\"\n"
+                                         "[source.replay]\npath = \"frames\"\n[plc]\nword_order = \"CDAB\"\n");
+  EXPECT_EQ(cfg.model.stl, dir.file("pipe.stl"));
+  EXPECT_EQ(cfg.source.replay.path, dir.file("frames"));
+  EXPECT_EQ(cfg.plc.encoding.order, WordOrder::cdab);
+  bool budget = false, order = false;
+  for (const auto& line : cfg.effective) {
+    budget = budget || line.rfind("service.budget_ms = 250", 0) == 0;
+    order = order || line == "plc.word_order = \"CDAB\"";
+  }
+  EXPECT_TRUE(budget && order);
+  EXPECT_THROW(load_config_model(default_config()), ConfigError);  // no model given
+}
+
+TEST(FrameCheck, RejectsWrongSizeNanNegativeAndEmptyFrames) {
+  Intrinsics k;
+  k.width = 8, k.height = 4;
+  Image<float> good(8, 4, 1000.0f);
+  EXPECT_EQ(check_frame(good, k), GrabStatus::ok);
+  EXPECT_EQ(check_frame(Image<float>(4, 8, 1000.0f), k), GrabStatus::frame_invalid);
+  EXPECT_EQ(check_frame(Image<float>(8, 4, 0.0f), k), GrabStatus::frame_invalid);
+  Image<float> nan = good;
+  nan.at(3, 2) = std::nanf("");
+  EXPECT_EQ(check_frame(nan, k), GrabStatus::frame_invalid);
+  Image<float> negative = good;
+  negative.at(0, 0) = -5;
+  EXPECT_EQ(check_frame(negative, k), GrabStatus::frame_invalid);
+}
+
+TEST(ReplaySource, DeliversADatasetInOrderAndLoops) {
+  test::TempDir dir;
+  SimulateRequest req;
+  req.out_dir = dir.path();
+  req.images = 3;
+  req.seed = 4;
+  req.previews = false;
+  req.scene.pile.pipes = 4;
+  write_simulated_dataset(sbend(), req);
+  ReplaySourceConfig cfg;
+  cfg.path = dir.path();
+  ReplaySource src(cfg);
+  ASSERT_EQ(src.frames(), 3u);
+  Frame f;
+  f.depth_mm.resize(src.intrinsics().width, src.intrinsics().height);
+  const int expected[] = {0, 1, 2, 0, 1};
+  for (int i = 0; i < 5; ++i) {
+    const auto trigger = Clock::now();
+    ASSERT_EQ(src.grab(trigger, trigger + std::chrono::seconds(1), &f), GrabStatus::ok);
+    EXPECT_EQ(f.im_id, expected[i]);
+    EXPECT_EQ(f.sequence, std::uint64_t(i + 1));
+    EXPECT_GT(f.captured, trigger);
+    const Image<float> disk = read_depth_mm(depth_path(dir.path(), 1, expected[i]), 1.0);
+    EXPECT_EQ(f.depth_mm.pixels, disk.pixels);
+    EXPECT_TRUE(f.camera.world_to_cam.has_value());
+  }
+}
+
+TEST(ReplaySource, BadFilesStopItAtStartUpNamingTheFile) {
+  test::TempDir dir;
+  ReplaySourceConfig cfg;
+  cfg.path = dir.file("missing");
+  EXPECT_THROW(ReplaySource{cfg}, SourceError);
+  cfg.path = dir.path();  // a folder of PNGs needs a camera file
+  test::write_text(dir.file("a.png"), "not a png");
+  EXPECT_THROW(ReplaySource{cfg}, SourceError);
+  test::write_text(dir.file("cam.json"), R"({"0": {"cam_K": [570,0,4, 0,570,2, 0,0,1], "depth_scale": 1.0}})");
+  cfg.camera = dir.file("cam.json");
+  try {
+    ReplaySource src(cfg);
+    FAIL() << "a broken PNG was accepted";
+  } catch (const SourceError& e) {
+    EXPECT_NE(std::string(e.what()).find("a.png"), std::string::npos) << e.what();
+  }
+}
+
+TEST(SimSource, FramesAreFreshAndAPickedPipeLeavesTheBin) {
+  SimSourceConfig cfg;
+  cfg.pipes = 5;
+  cfg.seed = 11;
+  SimSource src(sbend(), cfg);
+  Frame f;
+  f.depth_mm.resize(src.intrinsics().width, src.intrinsics().height);
+  const auto t0 = Clock::now();
+  ASSERT_EQ(src.grab(t0, t0 + std::chrono::seconds(1), &f), GrabStatus::ok);
+  const std::vector<float> first = f.depth_mm.pixels;
+  EXPECT_GT(f.captured, t0);
+  ASSERT_EQ(src.grab(Clock::now(), Clock::now() + std::chrono::seconds(1), &f), GrabStatus::ok);
+  EXPECT_NE(first, f.depth_mm.pixels);  // fresh sensor noise every frame
+  EXPECT_EQ(f.sequence, 2u);
+
+  const std::vector<Pose> pipes = src.pipes_in_camera();
+  ASSERT_EQ(pipes.size(), 5u);
+  Pose off = pipes[2];
+  off.translation().x() += 40;  // a pose on no pipe: the gripper closes on nothing
+  src.picked(off);
+  EXPECT_EQ(src.pipes_in_camera().size(), 5u);
+  src.picked(pipes[2]);
+  const std::vector<Pose> left = src.pipes_in_camera();
+  ASSERT_EQ(left.size(), 4u);
+  for (const Pose& p : left) EXPECT_GT((p.translation() - pipes[2].translation()).norm(), 1.0);
+  for (int i = 0; i < 4; ++i) src.picked(src.pipes_in_camera()[0]);
+  EXPECT_EQ(src.bins_filled(), 2);  // emptied, then refilled
+  EXPECT_EQ(src.pipes_in_camera().size(), 5u);
+}
+
+TEST(OpenNi2Source, DummyDeviceOpensAndDeliversFrames) {
+  OpenNi2SourceConfig cfg;
+  cfg.uri = "Dummy";
+  OpenNi2Source src(cfg);
+  ASSERT_EQ(src.intrinsics().width, 320);
+  ASSERT_EQ(src.intrinsics().height, 240);
+  EXPECT_NEAR(src.intrinsics().fx, cfg.fx / 2, 1e-9);  // FOV 0: the configured calibration, scaled
+  Frame f;
+  f.depth_mm.resize(320, 240);
+  std::uint64_t last_index = 0;
+  for (int i = 0; i < 3; ++i) {
+    const auto trigger = Clock::now();
+    ASSERT_EQ(src.grab(trigger, trigger + std::chrono::seconds(2), &f), GrabStatus::ok);
+    EXPECT_EQ(f.sequence, std::uint64_t(i + 1));
+    EXPECT_GT(f.captured, trigger);
+    EXPECT_GT(std::uint64_t(f.im_id), last_index);  // the device's frame index moves on
+    last_index = std::uint64_t(f.im_id);
+    int readings = 0;
+    for (float z : f.depth_mm.pixels) readings += z > 0;
+    EXPECT_GT(readings, 0);
+  }
+  OpenNi2SourceConfig bad;
+  bad.uri = "no-such-device";
+  EXPECT_THROW(OpenNi2Source{bad}, SourceError);
+}
+
+struct SimService {
+  test::TempDir dir;
+  AppConfig cfg;
+  std::unique_ptr<Service> service;
+  SimSource* sim = nullptr;
+  explicit SimService(int pipes = 8, double budget_ms = 5000) {
+    cfg = default_config();
+    cfg.source.sim.pipes = pipes;
+    cfg.source.sim.seed = 21;
+    cfg.service.budget_ms = budget_ms;
+    cfg.log.dir = dir.file("log");
+    cfg.service.summary_every = 3;
+    auto src = std::make_unique<SimSource>(sbend(), cfg.source.sim);
+    sim = src.get();
+    service = std::make_unique<Service>(cfg, sbend(), std::move(src));
+  }
+};
+
+double best_error(const SimSource& sim, const Pose& pose) {
+  std::vector<Eigen::Vector3d> v;
+  for (const auto& p : sbend().mesh.vertices) v.push_back(p.cast<double>());
+  double best = 1e9;
+  for (const Pose& gt : sim.pipes_in_camera()) best = std::min(best, mssd(v, pose, gt, {}, 1e9));
+  return best;
+}
+
+TEST(Service, LocateNextClearAndBadCommand) {
+  SimService s;
+  int found = 0;
+  for (int attempt = 0; attempt < 4 && !found; ++attempt) {
+    const reg::Result& r = s.service->run(1, std::uint16_t(attempt + 1), Clock::now());
+    ASSERT_TRUE(r.status == reg::Status::done_ok || r.status == reg::Status::done_none);
+    if (r.status != reg::Status::done_ok) continue;
+    found = r.count;
+    ASSERT_TRUE(r.pose.has_value());
+    EXPECT_EQ(r.index, 0);
+    EXPECT_LE(best_error(*s.sim, *s.service->presented()), 10.0);
+    // Camera frame (no hand-eye) and no grasp offset: the pose registers are the estimate.
+    EXPECT_NEAR(r.pose->xyz_mm[2], s.service->presented()->translation().z(), 1e-6);
+  }
+  ASSERT_GT(found, 0);
+  for (int i = 1; i < found; ++i) {
+    const reg::Result& r = s.service->run(2, 10, Clock::now());
+    EXPECT_EQ(r.status, reg::Status::done_ok);
+    EXPECT_EQ(r.index, i);
+  }
+  for (int i = 0; i < 2; ++i) {
+    const reg::Result& r = s.service->run(2, 11, Clock::now());
+    EXPECT_EQ(r.status, reg::Status::error);
+    EXPECT_EQ(r.error, reg::Error::no_further_result);
+    EXPECT_FALSE(r.pose.has_value());
+  }
+  EXPECT_EQ(s.service->run(3, 12, Clock::now()).status, reg::Status::ready);
+  EXPECT_EQ(s.service->run(7, 13, Clock::now()).error, reg::Error::bad_command);
+}
+
+TEST(Service, BudgetCutsASlowConfigurationShort) {
+  SimService s(20);
+  // Unbounded first, to learn how long the frame's work takes on this machine (and build).
+  s.service->run(1, 1, Clock::now());
+  const CycleRecord full = s.service->record();
+  ASSERT_GT(full.candidates, 2);
+  ASSERT_FALSE(full.budget_exhausted);
+  const double serial_ms = full.grab_ms + full.stages.zbuffer_ms + full.stages.normals_ms + full.stages.regions_ms;
+  // A budget that leaves room for the fixed part and a little of the candidates.
+  s.cfg.service.budget_ms = serial_ms + 0.25 * (full.cycle_ms - serial_ms);
+  int cut = 0;
+  for (int i = 0; i < 5; ++i) {
+    s.service->run(1, std::uint16_t(2 + i), Clock::now());
+    const CycleRecord& r = s.service->record();
+    cut += r.budget_exhausted;
+    EXPECT_LT(r.tried, r.candidates);
+    // Over by at most what one candidate step takes (worst case a whole refinement).
+    EXPECT_LE(r.cycle_ms, s.cfg.service.budget_ms + 0.5 * (full.cycle_ms - serial_ms)) << "budget " << s.cfg.service.budget_ms;
+    if (r.status == reg::Status::error) {
+      EXPECT_EQ(r.error, reg::Error::budget_exhausted);
+    }
+  }
+  EXPECT_EQ(cut, 5);
+}
+
+TEST(Service, TimingLogHasALinePerCycleAndSummaries) {
+  SimService s(6);
+  for (int i = 0; i < 6; ++i) {
+    s.service->run(1, std::uint16_t(i + 1), Clock::now());
+    s.service->log().write(s.service->record());
+  }
+  s.service->run(2, 7, Clock::now());
+  s.service->log().write(s.service->record());
+  std::istringstream in(test::read_text(s.service->log().path()));
+  std::string line;
+  int cycles = 0, summaries = 0;
+  while (std::getline(in, line)) {
+    const nlohmann::json j = nlohmann::json::parse(line);
+    if (j["event"] == "cycle") {
+      ++cycles;
+      for (const char* key : {"trigger_unix_ms", "frame_age_ms", "grab_ms", "zbuffer_ms", "normals_ms",
+                              "regions_ms", "ridge_icp_ms", "cycle_ms", "candidates", "tried", "status", "score",
+                              "budget_use"})
+        EXPECT_TRUE(j.contains(key)) << key;
+      if (j["cmd"] == 1) {
+        EXPECT_GT(j["frame_age_ms"].get<double>(), 0.0);
+      }
+    } else if (j["event"] == "summary") {
+      ++summaries;
+      EXPECT_EQ(j["cycles"], 3);
+      EXPECT_LE(j["cycle_ms_p50"].get<double>(), j["cycle_ms_max"].get<double>());
+    }
+  }
+  EXPECT_EQ(cycles, 7);
+  EXPECT_EQ(summaries, 2);  // every 3 LOCATE cycles
+}
+
+TEST(TimingLog, RotatesBySizeKeepingTheConfiguredCount) {
+  test::TempDir dir;
+  LogConfig cfg;
+  cfg.dir = dir.file("log");
+  cfg.max_file_kb = 1;
+  cfg.keep_files = 2;
+  TimingLog log(cfg, 1000);
+  CycleRecord r;
+  r.command = 1;
+  for (int i = 0; i < 20; ++i) log.write(r);  // ~600 bytes a line
+  namespace fs = std::filesystem;
+  EXPECT_TRUE(fs::exists(log.path()));
+  EXPECT_TRUE(fs::exists(log.path() + ".1"));
+  EXPECT_TRUE(fs::exists(log.path() + ".2"));
+  EXPECT_FALSE(fs::exists(log.path() + ".3"));
+  EXPECT_LE(fs::file_size(log.path() + ".1"), 2048u);
+}
+
+}  // namespace
+}  // namespace pipeloc
