@@ -125,3 +125,38 @@ TEST(RegisterMap, PoseIsNaNUnlessDoneOk) {
 
 }  // namespace
 }  // namespace pipeloc
+
+namespace pipeloc {
+namespace {
+
+// The worked example of firmware-host/REGISTERS.md, register for register.
+TEST(RegistersDoc, WorkedExampleMatchesTheEncoder) {
+  Pose pose = Pose::Identity();
+  pose.linear() = rotation_from_euler_deg({170, -5, 30}, EulerConvention::zyx);
+  pose.translation() = Eigen::Vector3d(412.5, -87.25, 1010);
+  reg::Result r;
+  r.status = reg::Status::done_ok;
+  r.pose = to_robot(pose, Pose::Identity(), Pose::Identity(), EulerConvention::zyx);
+  r.score = 0.875f;
+  std::uint16_t map[reg::kSize] = {};
+  reg::write_result_block(r, reg::Encoding{}, map);
+  const std::uint16_t abcd[] = {0x43CE, 0x4000, 0xC2AE, 0x8000, 0x447C, 0x8000, 0x432A, 0x0000,
+                                0xC0A0, 0x0000, 0x41F0, 0x0000, 0x3F60, 0x0000, 0x3D95, 0x3740,
+                                0x3F76, 0x5A7E, 0x3E82, 0x015C, 0x3D84, 0x1D39};
+  for (int i = 0; i < 22; ++i) {
+    // The angles come back through a rotation matrix: allow the last bit of the mantissa.
+    const int diff = std::abs(int(map[reg::kPose + i]) - int(abcd[i]));
+    EXPECT_LE(diff, i % 2 ? 2 : 0) << "register " << reg::kPose + i;
+  }
+  reg::Encoding scaled;
+  scaled.scaled_int32 = true;
+  reg::write_result_block(r, scaled, map);
+  const std::int32_t ints[] = {41250, -8725, 101000, 170000, -5000, 30000, 8750, 729, 9623, 2539, 645};
+  for (int i = 0; i < 11; ++i) {
+    const std::uint16_t* at = &map[reg::kPose + 2 * i];
+    EXPECT_EQ(std::int32_t(decode_u32(at, WordOrder::abcd)), ints[i]) << "register " << reg::kPose + 2 * i;
+  }
+}
+
+}  // namespace
+}  // namespace pipeloc

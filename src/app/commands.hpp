@@ -14,6 +14,7 @@ void add_eval_bop(CLI::App& app);
 void add_bench(CLI::App& app);
 void add_serve(CLI::App& app);
 void add_record(CLI::App& app);
+void add_timing_report(CLI::App& app);
 
 // Exit status a callback asks for (0 unless set).
 int& exit_status();

@@ -23,6 +23,7 @@ int main(int argc, char** argv) {
   pipeloc::app::add_bench(app);
   pipeloc::app::add_serve(app);
   pipeloc::app::add_record(app);
+  pipeloc::app::add_timing_report(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

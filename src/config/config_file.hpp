@@ -79,6 +79,7 @@ struct LogConfig {
   std::string dir = "pipeloc-log";  // timing log folder, relative to the working directory
   int max_file_kb = 10240;          // a log file is rotated beyond this size
   int keep_files = 5;               // rotated files kept (timing.jsonl.1 .. .N)
+  int overlay_every = 0;            // every N-th LOCATE: overlay-latest.png in dir (0 = never)
 };
 
 struct AppConfig {

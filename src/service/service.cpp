@@ -1,8 +1,12 @@
 #include "service/service.hpp"
 
+#include <spdlog/spdlog.h>
+
 #include <cmath>
+#include <filesystem>
 
 #include "model/make_pipe.hpp"
+#include "report/locate_overlay.hpp"
 
 namespace pipeloc {
 namespace {
@@ -175,6 +179,18 @@ void Service::locate(Clock::time_point trigger) {
 }
 
 void Service::after_publish() {
+  const int every = cfg_.log.overlay_every;
+  if (every > 0 && record_.command == std::uint16_t(reg::Command::locate) && record_.grab == GrabStatus::ok &&
+      cycles_ % std::uint32_t(every) == 0) {
+    // Written aside and renamed, so a viewer never catches half a file.
+    const std::string path = (std::filesystem::path(cfg_.log.dir) / "overlay-latest.png").string();
+    try {
+      write_rgb_png(path + ".tmp", draw_locate_overlay(locator_, frame_.depth_mm, frame_.camera));
+      std::filesystem::rename(path + ".tmp", path);
+    } catch (const std::exception& e) {
+      spdlog::warn("overlay: {}", e.what());
+    }
+  }
   if (!pick_pending_) return;
   pick_pending_ = false;
   if (const Pose* p = presented()) source_->picked(*p);

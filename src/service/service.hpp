@@ -31,7 +31,8 @@ class Service {
   // LOCATE captures a frame taken after the trigger and localizes within service.budget_ms;
   // NEXT presents the next pose of the last LOCATE; CLEAR_ERROR returns to READY.
   const reg::Result& run(std::uint16_t command, std::uint16_t req_id, Clock::time_point trigger);
-  // After the result is published: the simulated bin loses the pipe just handed out.
+  // After the result is published (outside the cycle): every log.overlay_every LOCATEs the
+  // integrator's picture of the frame is written, and the simulated bin loses the pipe handed out.
   void after_publish();
   // Stops a running cycle at its next check (shutdown).
   void cancel_cycles(const std::atomic<bool>* flag) { locator_.set_cancel_flag(flag); }
