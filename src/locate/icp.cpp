@@ -23,8 +23,12 @@ int model_ridge(const LocatorModel& lm, const Pose& pose, const Eigen::Vector2f&
                 const LocateConfig& cfg, IcpBuffers* buf) {
   const Eigen::Matrix3f r = pose.linear().cast<float>();
   const Eigen::Vector3f t = pose.translation().cast<float>();
-  const int n = int(lm.ridge_samples.size());
-  for (int i = 0; i < n; ++i) buf->moved[i] = r * lm.ridge_samples[i] + t;
+  const Eigen::Vector3f up_in_model = r.row(2).transpose();
+  // Samples facing down at this pose lie under the tube's top half and are never the highest of
+  // a ridge cell inside a run: they are left out (half the work of every iteration).
+  int n = 0;
+  for (std::size_t i = 0; i < lm.ridge_samples.size(); ++i)
+    if (lm.ridge_normals[i].dot(up_in_model) > -0.2f) buf->moved[std::size_t(n++)] = r * lm.ridge_samples[i] + t;
   return extract_zridge(buf->moved.data(), n, axis, float(cfg.ridge_cell_mm), 0.3f * lm.tube_d_mm,
                         &buf->ridge, buf->model_ridge.data(), int(buf->model_ridge.size()),
                         cfg.match_surface);
@@ -49,12 +53,14 @@ float truncated_mean(const Eigen::Vector3f* a, int na, const Eigen::Vector3f* b,
 
 }  // namespace
 
-void reserve_icp(IcpBuffers* buf, const LocatorModel& lm, int max_ridge_points, float ridge_cell_mm) {
+void reserve_icp(IcpBuffers* buf, const LocatorModel& lm, int max_ridge_points, float ridge_cell_mm,
+                 int max_region_points) {
   buf->moved.assign(lm.ridge_samples.size(), Eigen::Vector3f::Zero());
   buf->model_ridge.assign(std::size_t(max_ridge_points), Eigen::Vector3f::Zero());
   buf->src.assign(std::size_t(2 * max_ridge_points), Eigen::Vector3f::Zero());
   buf->dst.assign(std::size_t(2 * max_ridge_points), Eigen::Vector3f::Zero());
-  reserve_ridge(&buf->ridge, lm.extent_l_mm + 2 * lm.tube_d_mm, ridge_cell_mm);
+  reserve_ridge(&buf->ridge, lm.extent_l_mm + 2 * lm.tube_d_mm, ridge_cell_mm,
+                std::max(max_region_points, int(lm.ridge_samples.size())));
 }
 
 Pose fit_rigid(const Eigen::Vector3f* src, const Eigen::Vector3f* dst, int n) {

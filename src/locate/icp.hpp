@@ -17,7 +17,9 @@ struct IcpBuffers {
   RidgeBuffers ridge;
 };
 
-void reserve_icp(IcpBuffers* buf, const LocatorModel& lm, int max_ridge_points, float ridge_cell_mm);
+// max_region_points: the most points an observed region passes to the Z-ridge.
+void reserve_icp(IcpBuffers* buf, const LocatorModel& lm, int max_ridge_points, float ridge_cell_mm,
+                 int max_region_points = 0);
 
 struct RidgeFit {
   Pose pose = Pose::Identity();  // model -> bin

@@ -60,8 +60,8 @@ Locator::Locator(const PipeModel& model, const LocateConfig& cfg, const Intrinsi
                           (cfg.ridge_cell_mm * cfg.ridge_cell_mm)) +
                       16;
   for (Worker& wk : workers_) {
-    wk.ab.keys.assign(std::size_t(rb_.max_region_cells), 0);
-    reserve_icp(&wk.icp, lm_, ridge_capacity_, float(cfg.ridge_cell_mm));
+    reserve_axis(&wk.ab, rb_.max_region_cells, zb_.z.width, zb_.z.height);
+    reserve_icp(&wk.icp, lm_, ridge_capacity_, float(cfg.ridge_cell_mm), rb_.max_region_cells);
     wk.region_pts.assign(std::size_t(rb_.max_region_cells), Eigen::Vector3f::Zero());
     wk.fits.reserve(std::size_t(2 * std::max(1, cfg.initial_rotations)));
     wk.scratch_depth.resize(camera.width, camera.height, 0.0f);

@@ -41,7 +41,7 @@ AxisEstimate top_view_axis(const PipeModel& model, const Pose& model_to_bin, con
       }
   centroid /= float(std::max<std::size_t>(1, cells.size()));
   AxisBuffers buf;
-  buf.keys.resize(cells.size());
+  reserve_axis(&buf, int(cells.size()), w, h);
   return estimate_axis(zb, cells.data(), int(cells.size()), centroid, cfg, model.tube_diameter_mm, &buf);
 }
 
@@ -82,7 +82,10 @@ LocatorModel prepare_locator_model(const PipeModel& model, float margin_mm, cons
   const float area = model.mesh.surface_area();
   const std::size_t want = std::max<std::size_t>(500, std::size_t(area / 6));
   const std::size_t stride = std::max<std::size_t>(1, pts.size() / want);
-  for (std::size_t i = 0; i < pts.size(); i += stride) lm.ridge_samples.push_back(pts[i]);
+  for (std::size_t i = 0; i < pts.size(); i += stride) {
+    lm.ridge_samples.push_back(pts[i]);
+    lm.ridge_normals.push_back(model.surface.normals[i]);
+  }
   const std::size_t vstride = std::max<std::size_t>(1, model.mesh.vertices.size() / 64);
   for (std::size_t i = 0; i < model.mesh.vertices.size(); i += vstride)
     lm.check_points.push_back(model.mesh.vertices[i]);

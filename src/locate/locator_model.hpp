@@ -15,6 +15,7 @@ struct LocatorModel {
   Eigen::Vector3f up = Eigen::Vector3f::UnitZ();    // direction of least spread
   Eigen::Vector3f centroid = Eigen::Vector3f::Zero();
   std::vector<Eigen::Vector3f> ridge_samples;  // subset of surface samples for the Z-ridge
+  std::vector<Eigen::Vector3f> ridge_normals;  // their outward normals
   std::vector<Eigen::Vector3f> check_points;   // vertices spread over the part, for pose distances
   float tube_d_mm = 0, extent_l_mm = 0;
 

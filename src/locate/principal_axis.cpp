@@ -5,32 +5,50 @@
 
 namespace pipeloc {
 
+void reserve_axis(AxisBuffers* buf, int max_cells, int w, int h) {
+  buf->line.assign(std::size_t(max_cells), 0);
+  buf->along.assign(std::size_t(max_cells), 0);
+  buf->sorted.assign(std::size_t(max_cells), 0);
+  buf->start.assign(std::size_t(w + h + 4), 0);  // lines cross the region: at most its diagonal
+}
+
 int count_sections(const ZBuffer& zb, const int* cells, int count, float theta, float min_w, float max_w,
                    AxisBuffers* buf) {
-  // Scan lines run along (cos, sin); cells are binned into lines one cell apart and ordered
-  // along each line, so consecutive keys of one line form runs.
+  // Scan lines run along (cos, sin), one cell apart. Cells are grouped by line (a counting
+  // sort), then ordered along each line, so consecutive entries of a line form runs.
   const float c = std::cos(theta), s = std::sin(theta);
   const int w = zb.z.width;
   const float p = float(zb.pixel_mm);
-  std::int64_t* keys = buf->keys.data();
+  int lmin = 1 << 30, lmax = -(1 << 30);
   for (int k = 0; k < count; ++k) {
     const float x = float(cells[k] % w), y = float(cells[k] / w);
-    const std::int64_t line = round_nearest(-x * s + y * c) + (1 << 20);
-    const std::int64_t along = round_nearest((x * c + y * s) * 4) + (1 << 24);  // quarter cells
-    keys[k] = (line << 32) | along;
+    const int line = int(round_nearest(-x * s + y * c));
+    buf->line[std::size_t(k)] = line;
+    buf->along[std::size_t(k)] = int(round_nearest((x * c + y * s) * 4));  // quarter cells
+    lmin = std::min(lmin, line), lmax = std::max(lmax, line);
   }
-  std::sort(keys, keys + count);
+  if (count == 0 || lmax - lmin + 2 > int(buf->start.size())) return 0;
+  const int lines = lmax - lmin + 1;
+  int* start = buf->start.data();
+  std::fill_n(start, lines + 1, 0);
+  for (int k = 0; k < count; ++k) ++start[buf->line[std::size_t(k)] - lmin + 1];
+  for (int l = 0; l < lines; ++l) start[l + 1] += start[l];
+  for (int k = 0; k < count; ++k) buf->sorted[std::size_t(start[buf->line[std::size_t(k)] - lmin]++)] = buf->along[std::size_t(k)];
+  // start[l] now ends line l: line l spans [start[l-1], start[l]).
   int sections = 0;
-  int k = 0;
-  while (k < count) {
-    int e = k;
-    // A run continues while the next cell of the same line is at most 1.5 cells away.
-    while (e + 1 < count && (keys[e + 1] >> 32) == (keys[k] >> 32) &&
-           (keys[e + 1] & 0xffffffff) - (keys[e] & 0xffffffff) <= 6)
-      ++e;
-    const float width = (float((keys[e] & 0xffffffff) - (keys[k] & 0xffffffff)) / 4 + 1) * p;
-    sections += width >= min_w && width <= max_w;
-    k = e + 1;
+  for (int l = 0, b = 0; l < lines; b = start[l], ++l) {
+    int* a = buf->sorted.data() + b;
+    const int n = start[l] - b;
+    std::sort(a, a + n);
+    int k = 0;
+    while (k < n) {
+      int e = k;
+      // A run continues while the next cell of the line is at most 1.5 cells away.
+      while (e + 1 < n && a[e + 1] - a[e] <= 6) ++e;
+      const float width = (float(a[e] - a[k]) / 4 + 1) * p;
+      sections += width >= min_w && width <= max_w;
+      k = e + 1;
+    }
   }
   return sections;
 }

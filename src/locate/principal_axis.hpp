@@ -18,8 +18,12 @@ struct AxisEstimate {
 };
 
 struct AxisBuffers {
-  std::vector<std::int64_t> keys;  // capacity: the largest region
+  std::vector<int> line, along;  // per region cell; capacity: the largest region
+  std::vector<int> start;        // per scan line: where its cells begin in `sorted`
+  std::vector<int> sorted;       // cells' along-positions grouped by line
 };
+// Sizes the buffers for regions of up to max_cells cells of a Z-buffer up to w x h cells.
+void reserve_axis(AxisBuffers* buf, int max_cells, int w, int h);
 
 // Number of runs ("cross-sections") of region cells along scan lines in direction theta whose
 // width lies in [min_w, max_w] mm.

@@ -6,7 +6,8 @@
 
 namespace pipeloc {
 
-void reserve_ridge(RidgeBuffers* rb, float max_extent_mm, float cell_mm) {
+void reserve_ridge(RidgeBuffers* rb, float max_extent_mm, float cell_mm, int max_points) {
+  rb->uv.assign(std::size_t(max_points), Eigen::Vector2f::Zero());
   rb->cols = rb->rows = int(std::ceil(max_extent_mm / cell_mm)) + 2;
   rb->top_z.assign(std::size_t(rb->cols) * rb->rows, 0.f);
   rb->top_p.assign(std::size_t(rb->cols) * rb->rows, Eigen::Vector3f::Zero());
@@ -18,8 +19,10 @@ int extract_zridge(const Eigen::Vector3f* pts, int count, const Eigen::Vector2f&
   if (count == 0) return 0;
   const Eigen::Vector2f across(-axis.y(), axis.x());
   float u0 = 1e30f, u1 = -1e30f, v0 = 1e30f, v1 = -1e30f;
+  const bool keep_uv = count <= int(rb->uv.size());  // else computed twice
   for (int k = 0; k < count; ++k) {
     const float u = pts[k].head<2>().dot(axis), v = pts[k].head<2>().dot(across);
+    if (keep_uv) rb->uv[std::size_t(k)] = Eigen::Vector2f(u, v);
     u0 = std::min(u0, u), u1 = std::max(u1, u), v0 = std::min(v0, v), v1 = std::max(v1, v);
   }
   // Rows are lines across the axis (fixed u); columns run across (v).
@@ -27,9 +30,12 @@ int extract_zridge(const Eigen::Vector3f* pts, int count, const Eigen::Vector2f&
   const int cols = std::min(rb->cols, int((v1 - v0) / cell) + 1);
   constexpr float kNone = -std::numeric_limits<float>::infinity();
   std::fill_n(rb->top_z.begin(), std::size_t(rows) * cols, kNone);
+  const float inv_cell = 1.0f / cell;
   for (int k = 0; k < count; ++k) {
-    const int r = int((pts[k].head<2>().dot(axis) - u0) / cell);
-    const int c = int((pts[k].head<2>().dot(across) - v0) / cell);
+    const Eigen::Vector2f uv =
+        keep_uv ? rb->uv[std::size_t(k)] : Eigen::Vector2f(pts[k].head<2>().dot(axis), pts[k].head<2>().dot(across));
+    const int r = int((uv.x() - u0) * inv_cell);
+    const int c = int((uv.y() - v0) * inv_cell);
     if (r < 0 || c < 0 || r >= rows || c >= cols) continue;
     float& z = rb->top_z[std::size_t(r) * cols + c];
     if (pts[k].z() > z) z = pts[k].z(), rb->top_p[std::size_t(r) * cols + c] = pts[k];

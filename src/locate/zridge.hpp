@@ -12,9 +12,10 @@ struct RidgeBuffers {
   int cols = 0, rows = 0;              // capacity of the axis-aligned grid
   std::vector<float> top_z;            // per cell: highest z
   std::vector<Eigen::Vector3f> top_p;  // per cell: that point
+  std::vector<Eigen::Vector2f> uv;     // per input point: along and across the axis
 };
 
-void reserve_ridge(RidgeBuffers* rb, float max_extent_mm, float cell_mm);
+void reserve_ridge(RidgeBuffers* rb, float max_extent_mm, float cell_mm, int max_points = 0);
 
 // points: bin frame. axis: unit in XY. Writes at most `capacity` ridge points to out and
 // returns their count. Runs narrower than min_run_mm are ignored (noise, pipe ends).
