@@ -68,6 +68,24 @@ TEST(Normals, CylinderTopFollowsTheSurface) {
   }
 }
 
+TEST(Normals, RowBandsGiveTheSameNormalsAsOnePass) {
+  const double r = 10, cy = 30;
+  ZBuffer zb = synthetic_zbuffer(60, [&](double x, double y) {
+    const double dy = y - cy + 0.1 * x;
+    return std::abs(dy) < r ? float(std::sqrt(r * r - dy * dy)) : ZBuffer::kEmpty;
+  });
+  NormalMap one, banded;
+  reserve_normals(&one, zb);
+  reserve_normals(&banded, zb, 3);
+  compute_normals(zb, 7, 20, &one);
+  const int cuts[] = {0, 17, 41, zb.height};
+  for (int b = 0; b < 3; ++b)
+    compute_normals_rows(zb, 7, 20, cuts[b], cuts[b + 1], banded.column.data() + std::size_t(b) * 9 * zb.z.width,
+                         &banded);
+  for (int j = 0; j < zb.height; ++j)
+    for (int i = 0; i < zb.width; ++i) EXPECT_LT((one.n.at(i, j) - banded.n.at(i, j)).norm(), 1e-5f) << i << "," << j;
+}
+
 // A frame of one pipe lying alone in the bin, with the sensor model's noise.
 struct OnePipe {
   SimulatedScene scene;

@@ -141,6 +141,7 @@ void read_locate(Section& s, LocateConfig* c) {
   s.integer("initial_rotations", &c->initial_rotations, 1, 12, "states per direction");
   s.integer("icp_max_iterations", &c->icp_max_iterations, 1, 500, "iterations");
   s.integer("icp_probe_iterations", &c->icp_probe_iterations, 1, 500, "iterations");
+  s.real("icp_probe_cell_mm", &c->icp_probe_cell_mm, 0.5, 20, "mm");
   s.integer("icp_continued_states", &c->icp_continued_states, 1, 48, "states");
   s.real("icp_converged_mm", &c->icp_converged_mm, 0.001, 10, "mm");
   s.real("residual_max_of_d", &c->residual_max_of_d, 0.01, 5, "x D");

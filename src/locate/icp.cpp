@@ -19,17 +19,20 @@ int nearest(const Eigen::Vector3f& q, const Eigen::Vector3f* pts, int n, float* 
   return best;
 }
 
-int model_ridge(const LocatorModel& lm, const Pose& pose, const Eigen::Vector2f& axis,
+int model_ridge(const LocatorModel& lm, const Pose& pose, const Eigen::Vector2f& axis, float cell_mm,
                 const LocateConfig& cfg, IcpBuffers* buf) {
   const Eigen::Matrix3f r = pose.linear().cast<float>();
   const Eigen::Vector3f t = pose.translation().cast<float>();
   const Eigen::Vector3f up_in_model = r.row(2).transpose();
   // Samples facing down at this pose lie under the tube's top half and are never the highest of
   // a ridge cell inside a run: they are left out (half the work of every iteration).
+  // Coarser cells need proportionally fewer samples: the same few per cell.
+  const std::size_t stride = std::size_t(std::max(1, int(cell_mm / float(cfg.ridge_cell_mm) + 0.5f)));
+  const std::size_t step = stride * stride;
   int n = 0;
-  for (std::size_t i = 0; i < lm.ridge_samples.size(); ++i)
+  for (std::size_t i = 0; i < lm.ridge_samples.size(); i += step)
     if (lm.ridge_normals[i].dot(up_in_model) > -0.2f) buf->moved[std::size_t(n++)] = r * lm.ridge_samples[i] + t;
-  return extract_zridge(buf->moved.data(), n, axis, float(cfg.ridge_cell_mm), 0.3f * lm.tube_d_mm,
+  return extract_zridge(buf->moved.data(), n, axis, cell_mm, 0.3f * lm.tube_d_mm,
                         &buf->ridge, buf->model_ridge.data(), int(buf->model_ridge.size()),
                         cfg.match_surface);
 }
@@ -81,7 +84,8 @@ Pose fit_rigid(const Eigen::Vector3f* src, const Eigen::Vector3f* dst, int n) {
 
 RidgeFit ridge_icp(const LocatorModel& lm, const Pose& start, const Eigen::Vector3f* obs, int n_obs,
                    const Eigen::Vector2f& axis, const LocateConfig& cfg, int max_iterations, IcpBuffers* buf,
-                   float gate_mm) {
+                   float gate_mm, float cell_mm) {
+  if (cell_mm <= 0) cell_mm = float(cfg.ridge_cell_mm);
   RidgeFit fit;
   fit.pose = start;
   const float d = lm.tube_d_mm;
@@ -89,7 +93,7 @@ RidgeFit ridge_icp(const LocatorModel& lm, const Pose& start, const Eigen::Vecto
   float gate = gate_mm > 0 ? gate_mm : std::max(lm.extent_l_mm / 3, d);
   for (int it = 0; it < max_iterations; ++it) {
     fit.iterations = it + 1;
-    const int nm = model_ridge(lm, fit.pose, axis, cfg, buf);  // 2.2.1
+    const int nm = model_ridge(lm, fit.pose, axis, cell_mm, cfg, buf);  // 2.2.1
     int pairs = 0;
     for (int i = 0; i < nm; ++i) {  // 2.2.2
       float d2;
@@ -117,7 +121,7 @@ RidgeFit ridge_icp(const LocatorModel& lm, const Pose& start, const Eigen::Vecto
         delta.translation().norm() + Eigen::AngleAxisd(delta.linear()).angle() * lm.extent_l_mm / 2;
     if (moved < cfg.icp_converged_mm && gate <= 0.5f * d) break;
   }
-  const int nm = model_ridge(lm, fit.pose, axis, cfg, buf);
+  const int nm = model_ridge(lm, fit.pose, axis, cell_mm, cfg, buf);
   fit.model_ridge_points = nm;
   fit.gate_mm = gate;
   const float cap = 0.5f * d;

@@ -34,10 +34,11 @@ struct RidgeFit {
 Pose fit_rigid(const Eigen::Vector3f* src, const Eigen::Vector3f* dst, int n);
 
 // One run of Algorithm 2's inner loop from `start`.
-// `gate_mm` < 0 starts the correspondence gate at L/3 (a cold start).
+// `gate_mm` < 0 starts the correspondence gate at L/3 (a cold start). `cell_mm` is the ridge
+// cell of the observed ridge given (<= 0: cfg.ridge_cell_mm); the model's ridge uses the same.
 RidgeFit ridge_icp(const LocatorModel& lm, const Pose& start, const Eigen::Vector3f* observed_ridge,
                    int n_observed, const Eigen::Vector2f& axis, const LocateConfig& cfg, int max_iterations,
-                   IcpBuffers* buf, float gate_mm = -1);
+                   IcpBuffers* buf, float gate_mm = -1, float cell_mm = -1);
 
 struct RefineResult {
   Pose pose = Pose::Identity();

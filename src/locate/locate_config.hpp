@@ -35,6 +35,7 @@ struct LocateConfig {
   int initial_rotations = 6;  // 0/120/240 degrees about the axis
   int icp_max_iterations = 24;
   int icp_probe_iterations = 6;  // every initial state gets this many ...
+  double icp_probe_cell_mm = 4.0;  // ... on ridges of this cell size (coarse: a quarter of the work)
   int icp_continued_states = 4;  // ... and the best this many run to convergence
   double icp_converged_mm = 0.05;
   double residual_max_of_d = 0.35;  // R_th = this * D (mean ridge distance; verification follows)

@@ -49,7 +49,7 @@ Locator::Locator(const PipeModel& model, const LocateConfig& cfg, const Intrinsi
       pool_(std::max(1, cfg.threads)) {
   lm_ = prepare_locator_model(model, float(cfg.refine_inlier_mm) + 4.0f, cfg);
   reserve_zbuffer(&zb_, cfg.zbuffer_max_side_mm, cfg.zbuffer_pixel_mm);
-  reserve_normals(&nm_, zb_);
+  reserve_normals(&nm_, zb_, pool_.size());
   hole_scratch_.assign(zb_.z.pixels.size(), 0.0f);
   reserve_regions(&rb_, zb_, cfg, lm_.tube_d_mm, lm_.extent_l_mm);
 
@@ -63,6 +63,7 @@ Locator::Locator(const PipeModel& model, const LocateConfig& cfg, const Intrinsi
     reserve_axis(&wk.ab, rb_.max_region_cells, zb_.z.width, zb_.z.height);
     reserve_icp(&wk.icp, lm_, ridge_capacity_, float(cfg.ridge_cell_mm), rb_.max_region_cells);
     wk.region_pts.assign(std::size_t(rb_.max_region_cells), Eigen::Vector3f::Zero());
+    wk.coarse_ridge.assign(std::size_t(ridge_capacity_), Eigen::Vector3f::Zero());
     wk.fits.reserve(std::size_t(2 * std::max(1, cfg.initial_rotations)));
     wk.scratch_depth.resize(camera.width, camera.height, 0.0f);
   }
@@ -91,7 +92,19 @@ const LocateOutput& Locator::locate(const Image<float>& depth, const CameraInfo&
 
   t = Clock::now();
   const int window = std::max(3, int(std::lround(cfg_.normal_window_mm / zb_.pixel_mm)) | 1);
-  compute_normals(zb_, window, int(cfg_.normal_min_valid_share * window * window), &nm_);
+  // Row bands on the pool: each thread its band, with its own running sums.
+  struct NormalTask {
+    Locator* self;
+    int window, min_valid, bands;
+    static void run(void* ctx, int band, int) {
+      const NormalTask& t = *static_cast<const NormalTask*>(ctx);
+      const ZBuffer& zb = t.self->zb_;
+      const int j0 = zb.height * band / t.bands, j1 = zb.height * (band + 1) / t.bands;
+      compute_normals_rows(zb, t.window, t.min_valid, j0, j1,
+                           t.self->nm_.column.data() + std::size_t(band) * 9 * zb.z.width, &t.self->nm_);
+    }
+  } normal_task{this, window, int(cfg_.normal_min_valid_share * window * window), pool_.size()};
+  pool_.run(pool_.size(), &NormalTask::run, &normal_task);
   out_.times.normals_ms = ms_since(t);
 
   t = Clock::now();
@@ -182,10 +195,15 @@ void Locator::work_candidate(int c, Worker& wk, const Image<float>& depth, const
   wk.fits.clear();
   // All 2 x turns states get a few iterations; the most promising continue to convergence.
   const int turns = std::max(1, cfg_.initial_rotations);
+  // The probes rank the starts on coarser ridges of the same region.
+  const float probe_cell = float(std::max(cfg_.icp_probe_cell_mm, cfg_.ridge_cell_mm));
+  const int n_coarse = extract_zridge(wk.region_pts.data(), count, trace.axis.axis, probe_cell, 0.3f * d,
+                                      &wk.icp.ridge, wk.coarse_ridge.data(), ridge_capacity_, cfg_.match_surface);
   for (int dir = 0; dir < 2; ++dir)
     for (int r = 0; r < turns; ++r)
-      wk.fits.push_back(ridge_icp(lm_, initial_state(lm_, trace.axis, dir == 1, r), ridge, trace.ridge_count,
-                                  trace.axis.axis, cfg_, cfg_.icp_probe_iterations, &wk.icp));
+      wk.fits.push_back(ridge_icp(lm_, initial_state(lm_, trace.axis, dir == 1, r), wk.coarse_ridge.data(),
+                                  n_coarse, trace.axis.axis, cfg_, cfg_.icp_probe_iterations, &wk.icp, -1,
+                                  probe_cell));
   std::sort(wk.fits.begin(), wk.fits.end(),
             [](const RidgeFit& x, const RidgeFit& y) { return x.cost_mm < y.cost_mm; });
   const int keep = std::min(int(wk.fits.size()), cfg_.icp_continued_states);

@@ -95,6 +95,7 @@ class Locator {
     AxisBuffers ab;
     IcpBuffers icp;
     std::vector<Eigen::Vector3f> region_pts;
+    std::vector<Eigen::Vector3f> coarse_ridge;  // the region's Z-ridge on the probes' cells
     std::vector<RidgeFit> fits;
     Image<float> scratch_depth;
     StageTimes times;

@@ -27,17 +27,17 @@ void accumulate(const ZBuffer& zb, int j, double sign, double* column) {
 
 }  // namespace
 
-void reserve_normals(NormalMap* nm, const ZBuffer& zb) {
+void reserve_normals(NormalMap* nm, const ZBuffer& zb, int bands) {
   nm->n.resize(zb.z.width, zb.z.height, Eigen::Vector3f::Zero());
-  nm->column.assign(std::size_t(kSums) * zb.z.width, 0.0);
+  nm->column.assign(std::size_t(kSums) * zb.z.width * std::size_t(std::max(1, bands)), 0.0);
 }
 
-void compute_normals(const ZBuffer& zb, int window, int min_valid, NormalMap* nm) {
+void compute_normals_rows(const ZBuffer& zb, int window, int min_valid, int j0, int j1, double* col,
+                          NormalMap* nm) {
   const int k = window / 2;
-  std::fill(nm->column.begin(), nm->column.end(), 0.0);
-  double* col = nm->column.data();
-  for (int j = 0; j < k && j < zb.height; ++j) accumulate(zb, j, 1, col);
-  for (int j = 0; j < zb.height; ++j) {
+  std::fill(col, col + std::size_t(kSums) * zb.width, 0.0);
+  for (int j = j0 - k - 1; j < j0 + k; ++j) accumulate(zb, j, 1, col);  // the loop drops row j0-k-1 first
+  for (int j = j0; j < j1; ++j) {
     // Column sums hold rows j-k .. j+k.
     accumulate(zb, j + k, 1, col);
     accumulate(zb, j - k - 1, -1, col);
@@ -63,6 +63,10 @@ void compute_normals(const ZBuffer& zb, int window, int min_valid, NormalMap* nm
       out = Eigen::Vector3f(float(-a / zb.pixel_mm), float(-b / zb.pixel_mm), 1.0f).normalized();
     }
   }
+}
+
+void compute_normals(const ZBuffer& zb, int window, int min_valid, NormalMap* nm) {
+  compute_normals_rows(zb, window, min_valid, 0, zb.height, nm->column.data(), nm);
 }
 
 }  // namespace pipeloc

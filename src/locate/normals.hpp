@@ -9,10 +9,16 @@ namespace pipeloc {
 
 struct NormalMap {
   Image<Eigen::Vector3f> n;    // unit, Z up; zero where there is no normal
-  std::vector<double> column;  // running column sums, 9 per cell column (fixed size)
+  std::vector<double> column;  // running column sums, 9 per cell column, per band (fixed size)
 };
 
-void reserve_normals(NormalMap* nm, const ZBuffer& zb);
+// `bands`: how many row bands may be worked at once (each needs its own column sums).
+void reserve_normals(NormalMap* nm, const ZBuffer& zb, int bands = 1);
+
+// Rows [j0, j1) only, with `column` (9 x width doubles) as this band's running sums: bands of
+// one Z-buffer can run on different threads.
+void compute_normals_rows(const ZBuffer& zb, int window_cells, int min_valid, int j0, int j1, double* column,
+                          NormalMap* nm);
 
 // window_cells odd; cells with fewer than min_valid valid neighbours get no normal.
 void compute_normals(const ZBuffer& zb, int window_cells, int min_valid, NormalMap* nm);
