@@ -35,6 +35,7 @@ Json estimate_json(const PipeEstimate& e, int rank, bool pick) {
           {"ridge_residual_mm", e.ridge_cost_mm},
           {"ridge_points", e.ridge_points},
           {"refine_inliers", e.refine_inliers},
+          {"refine_points", e.refine_points},
           {"refine_rms_mm", e.refine_rms_mm},
           {"agreement", e.check.agreement()},
           {"free_space", e.check.free_space()},

@@ -36,7 +36,8 @@ struct LocateConfig {
   int icp_max_iterations = 24;
   int icp_probe_iterations = 6;  // every initial state gets this many ...
   double icp_probe_cell_mm = 4.0;  // ... on ridges of this cell size (coarse: a quarter of the work)
-  int icp_continued_states = 4;  // ... and the best this many run to convergence
+  int icp_continued_states = 4;  // ... and the best this many run to convergence,
+  int icp_fine_iterations = 8;   // the last this many on ridge_cell_mm, the others on the probe cells
   double icp_converged_mm = 0.05;
   double residual_max_of_d = 0.35;  // R_th = this * D (mean ridge distance; verification follows)
 

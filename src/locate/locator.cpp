@@ -213,9 +213,13 @@ void Locator::work_candidate(int c, Worker& wk, const Image<float>& depth, const
       return;
     }
     RidgeFit& f = wk.fits[std::size_t(i)];
-    const int done = f.iterations;
-    f = ridge_icp(lm_, f.pose, ridge, trace.ridge_count, trace.axis.axis, cfg_,
-                  std::max(1, cfg_.icp_max_iterations - done), &wk.icp, f.gate_mm);
+    // Continued on the coarse ridges, then the last icp_fine_iterations on the fine ones.
+    const int left = std::max(1, cfg_.icp_max_iterations - f.iterations);
+    const int fine = std::min(left, cfg_.icp_fine_iterations);
+    if (left > fine)
+      f = ridge_icp(lm_, f.pose, wk.coarse_ridge.data(), n_coarse, trace.axis.axis, cfg_, left - fine, &wk.icp,
+                    f.gate_mm, probe_cell);
+    f = ridge_icp(lm_, f.pose, ridge, trace.ridge_count, trace.axis.axis, cfg_, fine, &wk.icp, f.gate_mm);
   }
   wk.fits.resize(std::size_t(keep));
   if (out_of_time(deadline)) {
@@ -268,6 +272,7 @@ void Locator::work_candidate(int c, Worker& wk, const Image<float>& depth, const
     e.ridge_cost_mm = wk.fits[i].cost_mm;
     e.ridge_points = trace.ridge_count;
     e.refine_inliers = refined.inliers;
+    e.refine_points = refine_count;
     e.refine_rms_mm = refined.rms_mm;
     e.candidate = c;
     if (!have_best || quality(e.check) > quality(best.check)) {
