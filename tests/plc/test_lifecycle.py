@@ -46,11 +46,12 @@ class StartUp(unittest.TestCase):
             self.assertIn(named, out, text)
             self.assertNotIn("Segmentation", out)
         with socket.socket() as taken:  # a port somebody else holds
-            taken.bind(("127.0.0.1", PORT))
+            taken.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)  # TIME_WAIT of an earlier run
+            taken.bind(("127.0.0.1", PORT + 100))
             taken.listen(1)
-            code, out, _ = serve_with(f"[model]\npreset = \"sbend\"\n[plc]\nport = {PORT}\n")
+            code, out, _ = serve_with(f"[model]\npreset = \"sbend\"\n[plc]\nport = {PORT + 100}\n")
             self.assertNotEqual(code, 0)
-            self.assertIn(f"cannot listen on 127.0.0.1:{PORT}", out)
+            self.assertIn(f"cannot listen on 127.0.0.1:{PORT + 100}", out)
 
     def test_openni2_dummy_as_source(self):
         code, out, _ = serve_with("[model]\npreset = \"sbend\"\n[source]\nkind = \"openni2\"\n"
