@@ -70,7 +70,8 @@ class Running(unittest.TestCase):
         sock.settimeout(30)
         env = dict(os.environ, NOTIFY_SOCKET=notify_path, WATCHDOG_USEC="300000")
         # A slow configuration: many pipes, every start run to the end, many hypotheses.
-        slow = ("[locate]\ninitial_rotations = 12\nicp_continued_states = 24\nicp_max_iterations = 200\n"
+        slow = ("[locate]\ninitial_rotations = 12\nicp_continued_states = 24\nicp_max_iterations = 300\n"
+                "icp_probe_iterations = 100\nicp_probe_cell_mm = 2\nicp_fine_iterations = 300\n"
                 "verify_hypotheses = 24\n")
         svc = Service(BINARY, PORT, extra_toml=slow, pipes=40, budget_ms=20000, env=env)
         try:
@@ -83,7 +84,7 @@ class Running(unittest.TestCase):
             plc = Plc(PORT)
             plc.req_id += 1
             plc.client.write_registers(0, [LOCATE, plc.req_id], slave=1)
-            time.sleep(0.3)
+            time.sleep(0.2)
             self.assertEqual(plc.read()[STATUS], BUSY, "the cycle is still running")
             plc.close()
             start = time.time()
