@@ -60,15 +60,18 @@ AxisEstimate estimate_axis(const ZBuffer& zb, const int* cells, int count,
   const float min_w = float(cfg.section_width_min_of_d) * d, max_w = float(cfg.section_width_max_of_d) * d;
   const float step = float(cfg.scan_step_deg * M_PI / 180.0);
   float best_theta = 0;
-  // Coarse pass at twice the step, then the step either side of the best.
-  for (float theta = 0; theta < float(M_PI) - 1e-4f; theta += 2 * step) {
+  // Coarse pass at four times the step, then twice the step and the step either side of the
+  // best (13 scans for 5 degrees instead of 36).
+  for (float theta = 0; theta < float(M_PI) - 1e-4f; theta += 4 * step) {
     const int n = count_sections(zb, cells, count, theta, min_w, max_w, buf);
     if (n > est.best_count) est.best_count = n, best_theta = theta;
   }
-  const float coarse = best_theta;
-  for (const float theta : {coarse - step, coarse + step}) {
-    const int n = count_sections(zb, cells, count, theta, min_w, max_w, buf);
-    if (n > est.best_count) est.best_count = n, best_theta = theta;
+  for (const float delta : {2 * step, step}) {
+    const float centre = best_theta;
+    for (const float theta : {centre - delta, centre + delta}) {
+      const int n = count_sections(zb, cells, count, theta, min_w, max_w, buf);
+      if (n > est.best_count) est.best_count = n, best_theta = theta;
+    }
   }
   est.scan_deg = float(best_theta * 180.0 / M_PI);
   // The scan direction with most pipe-wide sections is perpendicular to the axis.
