@@ -95,6 +95,16 @@ TEST(Stl, AsciiWithBadVertex) {
   EXPECT_NE(error_of(dir.file("b.stl")).find("vertex"), std::string::npos) << error_of(dir.file("b.stl"));
 }
 
+// Found by tools/fuzz: coordinates of 1e30 mm overflowed the surface area to inf, and the
+// model derivation then indexed out of its sample table.
+TEST(Stl, CoordinatesBeyondAKilometreAreRefused) {
+  TempDir dir;
+  test::write_text(dir.file("h.stl"),
+                   "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 1e30\nvertex 1 0 0\nvertex 0 1 0\n"
+                   "endloop\nendfacet\nendsolid x\n");
+  EXPECT_NE(error_of(dir.file("h.stl")).find("beyond 1e6 mm"), std::string::npos) << error_of(dir.file("h.stl"));
+}
+
 TEST(Stl, NotAnStl) {
   TempDir dir;
   test::write_text(dir.file("n.stl"), "hello, this is a text file and not a mesh");

@@ -174,6 +174,7 @@ PipeModel derive_pipe_model(Mesh mesh, const std::string& source, const ModelDer
   orient_outward(&model.mesh);
   model.vertex_normals = compute_vertex_normals(model.mesh);
   const float area = model.mesh.surface_area();
+  if (!(area > 0) || !std::isfinite(area)) throw ModelError("model '" + source + "': surface area is zero");
   const int count = std::clamp(int(area * params.samples_per_mm2), 100, params.max_samples);
   model.surface = sample_surface(model.mesh, model.vertex_normals, count, params.seed);
   for (const auto& p : model.surface.points) model.centroid += p;

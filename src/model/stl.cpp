@@ -17,6 +17,13 @@ constexpr std::size_t kTriangleBytes = 50;  // normal, 3 vertices (12 float32), 
   throw ModelError("STL '" + path + "': " + what);
 }
 
+// A pipe in mm lies well within a kilometre; beyond, areas and volumes overflow float.
+constexpr float kMaxCoordinateMm = 1e6f;
+bool usable(float x, float y, float z) {
+  return std::isfinite(x) && std::isfinite(y) && std::isfinite(z) && std::abs(x) <= kMaxCoordinateMm &&
+         std::abs(y) <= kMaxCoordinateMm && std::abs(z) <= kMaxCoordinateMm;
+}
+
 Mesh parse_binary(const std::string& path, const std::string& bytes) {
   std::uint32_t count = 0;
   std::memcpy(&count, bytes.data() + kHeaderBytes, 4);
@@ -34,8 +41,8 @@ Mesh parse_binary(const std::string& path, const std::string& bytes) {
     for (int k = 0; k < 3; ++k) {
       float xyz[3];
       std::memcpy(xyz, p + 12 * k, 12);
-      if (!std::isfinite(xyz[0]) || !std::isfinite(xyz[1]) || !std::isfinite(xyz[2]))
-        fail(path, "triangle " + std::to_string(t) + " has a non-finite coordinate");
+      if (!usable(xyz[0], xyz[1], xyz[2]))
+        fail(path, "triangle " + std::to_string(t) + " has a coordinate that is not finite or beyond 1e6 mm");
       soup.vertices.emplace_back(xyz[0], xyz[1], xyz[2]);
     }
     const int b = int(t) * 3;
@@ -55,8 +62,9 @@ Mesh parse_ascii(const std::string& path, const std::string& text) {
       if (!(in >> x >> y >> z))
         fail(path, in.eof() ? "truncated: file ends inside a 'vertex' line"
                             : "malformed 'vertex' line (expected three numbers)");
-      if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z))
-        fail(path, "non-finite vertex coordinate");
+      if (!usable(x, y, z))
+        fail(path, "facet " + std::to_string(soup.faces.size()) +
+                       ": vertex coordinate not finite or beyond 1e6 mm");
       soup.vertices.emplace_back(x, y, z);
       ++line_vertices;
     } else if (word == "endfacet") {

@@ -58,9 +58,7 @@ ModbusServer::ModbusServer(const PlcConfig& cfg) : cfg_(cfg), port_(cfg.port) {
   const std::string where = cfg.address + ":" + std::to_string(cfg.port);
   ctx_ = modbus_new_tcp(cfg.address.c_str(), cfg.port);
   if (!ctx_) throw PlcError("plc.address '" + where + "': " + modbus_strerror(errno));
-  const auto timeout_us = std::uint32_t(cfg.byte_timeout_ms) * 1000u;
-  modbus_set_byte_timeout(ctx_, timeout_us / 1000000u, timeout_us % 1000000u);
-  modbus_set_indication_timeout(ctx_, timeout_us / 1000000u, timeout_us % 1000000u);
+  set_server_timeouts(ctx_, cfg.byte_timeout_ms);
   // Only the map's holding registers exist: reads and writes elsewhere get exception 02.
   mapping_ = modbus_mapping_new_start_address(0, 0, 0, 0, std::uint16_t(cfg.base), reg::kSize, 0, 0);
   if (!mapping_) {
@@ -131,18 +129,23 @@ void ModbusServer::serve_client(std::size_t i) {
     return;
   }
   ++counters_.requests;
-  const int header = modbus_get_header_length(ctx_);
+  if (reply_to_request(ctx_, mapping_, cfg_.base, query, rc) < 0) drop_client(i);
+}
+
+void set_server_timeouts(modbus_t* ctx, int byte_timeout_ms) {
+  const auto timeout_us = std::uint32_t(byte_timeout_ms) * 1000u;
+  modbus_set_byte_timeout(ctx, timeout_us / 1000000u, timeout_us % 1000000u);
+  modbus_set_indication_timeout(ctx, timeout_us / 1000000u, timeout_us % 1000000u);
+  modbus_set_response_timeout(ctx, 0, 1000);
+}
+
+int reply_to_request(modbus_t* ctx, modbus_mapping_t* mapping, int base, const std::uint8_t* query, int length) {
+  const int header = modbus_get_header_length(ctx);
   int first = 0, count = 0;
-  int replied;
-  if (written_range(query, header, rc, &first, &count) &&
-      (first < cfg_.base || first + count > cfg_.base + reg::kReqId + 1)) {
+  if (written_range(query, header, length, &first, &count) && (first < base || first + count > base + reg::kReqId + 1))
     // Only CMD and REQ_ID belong to the PLC; the rest is the service's.
-    ++counters_.exceptions;
-    replied = modbus_reply_exception(ctx_, query, MODBUS_EXCEPTION_ILLEGAL_DATA_ADDRESS);
-  } else {
-    replied = modbus_reply(ctx_, query, rc, mapping_);
-  }
-  if (replied < 0) drop_client(i);
+    return modbus_reply_exception(ctx, query, MODBUS_EXCEPTION_ILLEGAL_DATA_ADDRESS);
+  return modbus_reply(ctx, query, length, mapping);
 }
 
 bool ModbusServer::poll(int timeout_ms, int wake_fd, PlcRequest* req) {

@@ -27,6 +27,15 @@ struct PlcRequest {
   std::chrono::steady_clock::time_point at{};
 };
 
+// What the server does with one received request: an exception for writes outside CMD/REQ_ID,
+// else libmodbus's reply from the map (which answers reads outside it with exception 02).
+// Returns modbus_reply's result (-1: the connection failed). Used by the server and the fuzzer.
+int reply_to_request(modbus_t* ctx, modbus_mapping_t* mapping, int base, const std::uint8_t* query, int length);
+// Timeouts of a server context: a stalled request costs at most byte_timeout_ms, and libmodbus's
+// flush before some exception replies (an unknown function code) sleeps 1 ms instead of its
+// default 0.5 s response timeout, which would stall every client.
+void set_server_timeouts(modbus_t* ctx, int byte_timeout_ms);
+
 class ModbusServer {
  public:
   explicit ModbusServer(const PlcConfig& cfg);  // binds and listens; throws PlcError naming address:port

@@ -48,7 +48,6 @@ Pose config_grasp(const ModelConfig& m, EulerConvention euler) {
 
 Service::Service(const AppConfig& cfg, const PipeModel& model, std::unique_ptr<FrameSource> source)
     : cfg_(cfg),
-      model_(model),
       source_(std::move(source)),
       locator_(model, cfg.locate, source_->intrinsics()),
       log_(cfg.log, cfg.service.summary_every),

@@ -58,7 +58,6 @@ class Service {
   void present(int index);
 
   const AppConfig& cfg_;
-  const PipeModel& model_;
   std::unique_ptr<FrameSource> source_;
   Locator locator_;
   Frame frame_;

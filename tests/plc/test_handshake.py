@@ -106,8 +106,11 @@ class Handshake(unittest.TestCase):
         # Tables that do not exist.
         self.assertTrue(c.read_coils(0, 1, slave=1).isError())
         self.assertTrue(c.read_input_registers(0, 1, slave=1).isError())
-        # An illegal function (0x41 is not a Modbus function).
+        # An illegal function (0x41 is not a Modbus function), answered without stalling the
+        # server (libmodbus would sleep its 0.5 s response timeout before this reply).
+        start = time.time()
         reply = raw_request(PORT, bytes([0x41, 0, 0]))
+        self.assertLess(time.time() - start, 0.25)
         self.assertEqual(reply[0], 0xC1)
         self.assertEqual(reply[1], 1)
         # Garbage and a half request cost only their own connection.
