@@ -36,4 +36,13 @@ double rotation_angle_deg(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b) {
   return std::acos(c) * 180.0 / M_PI;
 }
 
+Pose pose_from_matrix_rowmajor(const double* m16) {
+  Eigen::Matrix4d m;
+  for (int i = 0; i < 16; ++i) m(i / 4, i % 4) = m16[i];
+  Pose p = Pose::Identity();
+  p.linear() = nearest_rotation(m.topLeftCorner<3, 3>());
+  p.translation() = m.topRightCorner<3, 1>();
+  return p;
+}
+
 }  // namespace pipeloc

@@ -16,6 +16,7 @@ struct OpenNi2Source::Device {
 };
 
 OpenNi2Source::OpenNi2Source(const OpenNi2SourceConfig& cfg) : cfg_(cfg), dev_(std::make_unique<Device>()) {
+  if (cfg.world_to_cam.size() == 16) world_to_cam_ = pose_from_matrix_rowmajor(cfg.world_to_cam.data());
   // OpenNI::shutdown() is never called: Debian's OpenNI2 2.2.0.33 crashes in it once a driver
   // thread has run; the process exit releases the device.
   if (openni::OpenNI::initialize() != openni::STATUS_OK)
@@ -145,12 +146,7 @@ GrabStatus OpenNi2Source::grab(Clock::time_point after, Clock::time_point deadli
   out->camera.intrinsics = intrinsics_;
   out->camera.depth_scale = 1.0;
   if (cfg_.world_to_cam.size() == 16) {
-    Eigen::Matrix4d m;
-    for (int i = 0; i < 16; ++i) m(i / 4, i % 4) = cfg_.world_to_cam[std::size_t(i)];
-    Pose p = Pose::Identity();
-    p.linear() = nearest_rotation(m.topLeftCorner<3, 3>());
-    p.translation() = m.topRightCorner<3, 1>();
-    out->camera.world_to_cam = p;
+    out->camera.world_to_cam = world_to_cam_;
   } else {
     out->camera.world_to_cam.reset();
   }

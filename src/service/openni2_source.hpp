@@ -29,6 +29,7 @@ class OpenNi2Source : public FrameSource {
   std::string device_name_;
   Clock::time_point last_open_attempt_{};
   std::uint64_t sequence_ = 0;
+  Pose world_to_cam_ = Pose::Identity();  // source.openni2.world_to_cam, when given
 };
 
 }  // namespace pipeloc

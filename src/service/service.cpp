@@ -17,15 +17,6 @@ double ms_between(Clock::time_point a, Clock::time_point b) {
 
 std::uint16_t clamp_u16(double v) { return std::uint16_t(std::clamp(std::lround(v), 0L, 65535L)); }
 
-Pose pose_from_rowmajor(const std::vector<double>& m16) {
-  Eigen::Matrix4d m;
-  for (int i = 0; i < 16; ++i) m(i / 4, i % 4) = m16[std::size_t(i)];
-  Pose p = Pose::Identity();
-  p.linear() = nearest_rotation(m.topLeftCorner<3, 3>());
-  p.translation() = m.topRightCorner<3, 1>();
-  return p;
-}
-
 }  // namespace
 
 PipeModel load_config_model(const AppConfig& cfg) {
@@ -36,7 +27,7 @@ PipeModel load_config_model(const AppConfig& cfg) {
 }
 
 Pose config_robot_from_camera(const PlcConfig& plc) {
-  return plc.robot_from_camera.size() == 16 ? pose_from_rowmajor(plc.robot_from_camera) : Pose::Identity();
+  return plc.robot_from_camera.size() == 16 ? pose_from_matrix_rowmajor(plc.robot_from_camera.data()) : Pose::Identity();
 }
 
 Pose config_grasp(const ModelConfig& m, EulerConvention euler) {
