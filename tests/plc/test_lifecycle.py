@@ -62,6 +62,30 @@ class StartUp(unittest.TestCase):
         self.assertEqual(out.count("frame_invalid"), 3, out)
 
 
+class Record(unittest.TestCase):
+    def test_record_writes_a_dataset_eval_bop_reads(self):
+        d = tempfile.mkdtemp(prefix="pipeloc-record-")
+        out = subprocess.run([BINARY, "record", "--frames", "3", "--out", d], capture_output=True, text=True,
+                             timeout=120)
+        self.assertEqual(out.returncode, 0, out.stdout + out.stderr)
+        for i in range(3):
+            self.assertTrue(os.path.exists(os.path.join(d, "test", "000001", "depth", f"{i:06d}.png")))
+            self.assertTrue(os.path.exists(os.path.join(d, "test", "000001", f"preview_{i:06d}.png")))
+        ev = subprocess.run([BINARY, "eval-bop", "--dataset", d, "--out", os.path.join(d, "r.csv")],
+                            capture_output=True, text=True, timeout=120)
+        self.assertEqual(ev.returncode, 0, ev.stdout + ev.stderr)
+        with open(os.path.join(d, "r.csv")) as f:
+            self.assertTrue(f.readline().startswith("scene_id,im_id,obj_id,score,R,t,time"))
+        # The Dummy device's frames are nearly empty: record says so and stops instead of writing them.
+        cfg = os.path.join(d, "dummy.toml")
+        with open(cfg, "w") as f:
+            f.write("[model]\npreset = \"sbend\"\n[source]\nkind = \"openni2\"\n[source.openni2]\nuri = \"Dummy\"\n")
+        dummy = subprocess.run([BINARY, "record", "--config", cfg, "--frames", "1", "--out", os.path.join(d, "dummy")],
+                               capture_output=True, text=True, timeout=120)
+        self.assertNotEqual(dummy.returncode, 0)
+        self.assertIn("frame_invalid", dummy.stdout + dummy.stderr)
+
+
 class Running(unittest.TestCase):
     def test_systemd_notify_and_sigterm_during_a_cycle(self):
         notify_path = os.path.join(tempfile.mkdtemp(prefix="pipeloc-notify-"), "notify.sock")
