@@ -83,6 +83,16 @@ const LocateOutput& Locator::locate(const Image<float>& depth, const CameraInfo&
   out_.budget_exhausted = false;
   out_.regions = {};
   const Pose bin_to_cam = bin_to_camera(camera);
+  // Anytime: what is not expected to finish before the deadline is not started. The expected
+  // durations are running averages of earlier cycles (none yet: everything is tried).
+  const auto expected = [](double ms) {
+    return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double, std::milli>(ms));
+  };
+  if (deadline != Clock::time_point::max() && t_start + expected(serial_ms_avg_) > deadline) {
+    out_.budget_exhausted = true;
+    out_.times.total_ms = ms_since(t_start);
+    return out_;
+  }
 
   auto t = Clock::now();
   out_.valid_pixels = build_zbuffer(depth, camera.intrinsics, bin_to_cam, &zb_);
@@ -116,8 +126,20 @@ const LocateOutput& Locator::locate(const Image<float>& depth, const CameraInfo&
   out_.traces.resize(std::size_t(n));
   std::fill(slot_filled_.begin(), slot_filled_.end(), 0);
   for (Worker& wk : workers_) wk.times = {};
-  Frame frame{this, &depth, &camera, bin_to_cam, deadline};
+  constexpr double kAverageWeight = 0.2;
+  const double serial_ms = ms_since(t_start);
+  serial_ms_avg_ = serial_ms_avg_ == 0 ? serial_ms : (1 - kAverageWeight) * serial_ms_avg_ + kAverageWeight * serial_ms;
+  const Clock::time_point start_by =
+      deadline == Clock::time_point::max() ? deadline : deadline - expected(candidate_ms_avg_);
+  Frame frame{this, &depth, &camera, bin_to_cam, start_by, deadline};
+  for (Worker& wk : workers_) wk.candidates_done = 0, wk.candidate_ms_sum = 0;
   pool_.run(n, &Locator::candidate_task, &frame);
+  int done = 0;
+  double done_ms = 0;
+  for (const Worker& wk : workers_) done += wk.candidates_done, done_ms += wk.candidate_ms_sum;
+  if (done > 0)
+    candidate_ms_avg_ = candidate_ms_avg_ == 0 ? done_ms / done
+                                               : (1 - kAverageWeight) * candidate_ms_avg_ + kAverageWeight * done_ms / done;
   for (const Worker& wk : workers_) {
     out_.times.axis_ms += wk.times.axis_ms;
     out_.times.ridge_icp_ms += wk.times.ridge_icp_ms;
@@ -141,8 +163,14 @@ const LocateOutput& Locator::locate(const Image<float>& depth, const CameraInfo&
 
 void Locator::candidate_task(void* frame, int c, int worker) {
   const Frame& f = *static_cast<const Frame*>(frame);
-  if (f.self->out_of_time(f.deadline)) return;  // trace stays "budget"
-  f.self->work_candidate(c, f.self->workers_[std::size_t(worker)], *f.depth, *f.camera, f.bin_to_cam, f.deadline);
+  // f.deadline is the real one less an average candidate: a candidate is only begun if it is
+  // expected to end in time (the trace stays "budget" otherwise).
+  if (f.self->out_of_time(f.deadline)) return;
+  Worker& wk = f.self->workers_[std::size_t(worker)];
+  const auto t0 = Clock::now();
+  f.self->work_candidate(c, wk, *f.depth, *f.camera, f.bin_to_cam, f.deadline_hard);
+  ++wk.candidates_done;
+  wk.candidate_ms_sum += ms_since(t0);
 }
 
 void Locator::merge_estimate(int c) {

@@ -100,13 +100,16 @@ class Locator {
     std::vector<RidgeFit> fits;
     Image<float> scratch_depth;
     StageTimes times;
+    int candidates_done = 0;  // this cycle, for the running average of a candidate's time
+    double candidate_ms_sum = 0;
   };
   struct Frame {  // what the candidate tasks of one locate() share
     Locator* self;
     const Image<float>* depth;
     const CameraInfo* camera;
     Pose bin_to_cam;
-    Clock::time_point deadline;
+    Clock::time_point deadline;       // begin no candidate after this
+    Clock::time_point deadline_hard;  // stop a candidate's work after this
   };
   static void candidate_task(void* frame, int c, int worker);
   void work_candidate(int c, Worker& wk, const Image<float>& depth, const CameraInfo& camera,
@@ -131,6 +134,7 @@ class Locator {
   LocateOutput out_;
   int ridge_capacity_ = 0;
   const std::atomic<bool>* cancel_ = nullptr;
+  double serial_ms_avg_ = 0, candidate_ms_avg_ = 0;  // running averages, for the anytime decisions
 };
 
 }  // namespace pipeloc
