@@ -255,6 +255,61 @@ TEST(Service, LocateNextClearAndBadCommand) {
   EXPECT_EQ(s.service->run(7, 13, Clock::now()).error, reg::Error::bad_command);
 }
 
+// A source that fails in scripted ways, then delivers the simulator's frames again.
+class FaultySource : public FrameSource {
+ public:
+  enum Fault { none, unavailable, wrong_size, all_zero, nan, negative };
+  FaultySource(const PipeModel& model, const SimSourceConfig& cfg, std::vector<Fault> script)
+      : sim_(model, cfg), script_(std::move(script)) {}
+  const char* kind() const override { return "faulty"; }
+  const Intrinsics& intrinsics() const override { return sim_.intrinsics(); }
+  std::string describe() const override { return "faulty sim"; }
+  GrabStatus grab(Clock::time_point after, Clock::time_point deadline, Frame* out) override {
+    const Fault f = next_ < script_.size() ? script_[next_++] : none;
+    if (f == unavailable) return GrabStatus::sensor_unavailable;
+    if (f == wrong_size) return GrabStatus::frame_invalid;  // as the OpenNI2 source reports it
+    const GrabStatus st = sim_.grab(after, deadline, out);
+    if (f == all_zero) out->depth_mm.fill(0.0f);
+    if (f == nan) out->depth_mm.at(100, 100) = std::nanf("");
+    if (f == negative) out->depth_mm.at(5, 7) = -3.0f;
+    return st;
+  }
+
+ private:
+  SimSource sim_;
+  std::vector<Fault> script_;
+  std::size_t next_ = 0;
+};
+
+TEST(Service, AFailingSourceGivesErrorsThenCyclesResume) {
+  test::TempDir dir;
+  AppConfig cfg = default_config();
+  cfg.source.sim.pipes = 8;
+  cfg.source.sim.seed = 21;
+  cfg.service.budget_ms = 5000;
+  cfg.log.dir = dir.file("log");
+  using F = FaultySource;
+  Service service(cfg, sbend(),
+                  std::make_unique<F>(sbend(), cfg.source.sim,
+                                      std::vector<F::Fault>{F::unavailable, F::wrong_size, F::all_zero, F::nan,
+                                                            F::negative, F::unavailable}));
+  const reg::Error expected[] = {reg::Error::sensor_unavailable, reg::Error::frame_invalid,
+                                 reg::Error::frame_invalid,      reg::Error::frame_invalid,
+                                 reg::Error::frame_invalid,      reg::Error::sensor_unavailable};
+  for (int i = 0; i < 6; ++i) {
+    const reg::Result& r = service.run(1, std::uint16_t(i + 1), Clock::now());
+    EXPECT_EQ(r.status, reg::Status::error) << i;
+    EXPECT_EQ(r.error, expected[i]) << i;
+    EXPECT_FALSE(r.pose.has_value()) << i;  // never a stale pose
+    EXPECT_EQ(r.count, 0) << i;
+    // NEXT after a failed LOCATE has nothing to walk.
+    EXPECT_EQ(service.run(2, std::uint16_t(100 + i), Clock::now()).error, reg::Error::no_further_result);
+  }
+  int ok = 0;
+  for (int i = 0; i < 3; ++i) ok += service.run(1, std::uint16_t(10 + i), Clock::now()).status == reg::Status::done_ok;
+  EXPECT_GT(ok, 0);  // the source is back: cycles resume
+}
+
 TEST(Service, BudgetCutsASlowConfigurationShort) {
   SimService s(20);
   // Unbounded first, to learn how long the frame's work takes on this machine (and build).
