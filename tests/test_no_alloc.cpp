@@ -12,7 +12,7 @@
 #include "service/service.hpp"
 #include "service/sim_source.hpp"
 #include "sim/scene.hpp"
-#include "test_util.hpp"
+#include "sim_config.hpp"
 
 namespace {
 std::atomic<long> g_allocations{0};
@@ -82,10 +82,7 @@ TEST(NoAllocation, FiftyCyclesOnSimulatedFramesAllocateNothing) {
 TEST(NoAllocation, FiftyServiceCyclesOnTheSimSourceAllocateNothing) {
   static const PipeModel model = derive_pipe_model(make_pipe(pipe_preset("sbend")), "sbend");
   test::TempDir dir;
-  AppConfig cfg = default_config();
-  cfg.source.sim.pipes = 15;
-  cfg.source.sim.seed = 9;
-  cfg.log.dir = dir.file("log");
+  AppConfig cfg = test::sim_config(dir, 15, 9);
   cfg.service.summary_every = 10;
   Service service(cfg, model, std::make_unique<SimSource>(model, cfg.source.sim));
   service.run(1, 1, Clock::now());  // the first cycle may settle

@@ -13,7 +13,7 @@
 #include "service/service.hpp"
 #include "service/sim_source.hpp"
 #include "sim/dataset_writer.hpp"
-#include "test_util.hpp"
+#include "sim_config.hpp"
 
 namespace pipeloc {
 namespace {
@@ -222,11 +222,8 @@ struct SimService {
   std::unique_ptr<Service> service;
   SimSource* sim = nullptr;
   explicit SimService(int pipes = 8, double budget_ms = 5000) {
-    cfg = default_config();
-    cfg.source.sim.pipes = pipes;
-    cfg.source.sim.seed = 21;
+    cfg = test::sim_config(dir, pipes, 21);
     cfg.service.budget_ms = budget_ms;
-    cfg.log.dir = dir.file("log");
     cfg.service.summary_every = 3;
     auto src = std::make_unique<SimSource>(sbend(), cfg.source.sim);
     sim = src.get();
@@ -300,11 +297,8 @@ class FaultySource : public FrameSource {
 
 TEST(Service, AFailingSourceGivesErrorsThenCyclesResume) {
   test::TempDir dir;
-  AppConfig cfg = default_config();
-  cfg.source.sim.pipes = 8;
-  cfg.source.sim.seed = 21;
+  AppConfig cfg = test::sim_config(dir, 8, 21);
   cfg.service.budget_ms = 5000;
-  cfg.log.dir = dir.file("log");
   using F = FaultySource;
   Service service(cfg, sbend(),
                   std::make_unique<F>(sbend(), cfg.source.sim,
@@ -331,10 +325,7 @@ TEST(Service, BudgetCutsASlowConfigurationShort) {
   // A slow configuration: every start run long, many hypotheses. Without a budget a frame takes
   // seconds; the budget leaves room for the fixed stages and a little more.
   test::TempDir dir;
-  AppConfig cfg = default_config();
-  cfg.source.sim.pipes = 20;
-  cfg.source.sim.seed = 21;
-  cfg.log.dir = dir.file("log");
+  AppConfig cfg = test::sim_config(dir, 20, 21);
   cfg.locate.initial_rotations = 12;
   cfg.locate.icp_probe_iterations = 40;
   cfg.locate.icp_continued_states = 24;
