@@ -61,9 +61,9 @@ def mssd(vertices, pose_a, pose_b):
 class Plc:
     """A PLC as Modbus TCP client of the service, doing DESIGN.md's handshake."""
 
-    def __init__(self, port):
-        self.client = ModbusTcpClient("127.0.0.1", port=port, timeout=3)
-        assert self.client.connect(), f"cannot connect to 127.0.0.1:{port}"
+    def __init__(self, port, host="127.0.0.1"):
+        self.client = ModbusTcpClient(host, port=port, timeout=3)
+        assert self.client.connect(), f"cannot connect to {host}:{port}"
         self.req_id = self.read()[ACK_ID]
 
     def read(self, address=0, count=SIZE):

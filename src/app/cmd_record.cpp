@@ -28,8 +28,7 @@ void add_record(CLI::App& app) {
   cmd->add_option("--period-ms", opt->period_ms, "pause between frames")->check(CLI::Range(0, 3600000));
   cmd->add_option("--out", opt->out, "dataset folder to write")->required();
   cmd->callback([opt] {
-    AppConfig cfg = opt->config.empty() ? default_config() : load_config(opt->config);
-    if (opt->config.empty()) cfg.model.preset = "sbend";
+    const AppConfig cfg = opt->config.empty() ? embedded_default_config() : load_config(opt->config);
     const PipeModel model = load_config_model(cfg);
     std::unique_ptr<FrameSource> source = open_frame_source(cfg, model);
     spdlog::info("record: {}", source->describe());
@@ -54,7 +53,8 @@ void add_record(CLI::App& app) {
         if (++failed > 3 * opt->frames + 10) throw SourceError("record: the source keeps failing; stopped");
         continue;
       }
-      write_depth_png(depth_path(opt->out, 1, written), to_raw_depth(frame.depth_mm, frame.camera.depth_scale));
+      write_depth_png(depth_path(opt->out, 1, written),
+                      to_raw_depth(frame.depth_mm, frame.camera.depth_scale));
       char name[32];
       std::snprintf(name, sizeof name, "/preview_%06d.png", written);
       write_rgb_png(scene + name, shade_depth(frame.depth_mm));

@@ -31,20 +31,15 @@ void install_signal_handlers() {
   std::signal(SIGPIPE, SIG_IGN);
 }
 
-// The embedded default: a simulated bin of S-bend pipes, Modbus server on 127.0.0.1:1502.
-AppConfig embedded_default() {
-  AppConfig cfg = default_config();
-  cfg.model.preset = "sbend";
-  return cfg;
-}
-
 void log_result(const Published& p, const CycleRecord& rec) {
   const reg::Result& r = p.result;
   if (r.status == reg::Status::done_ok && r.pose)
-    spdlog::info("req {}: {} pose {}/{} x {:.1f} y {:.1f} z {:.1f} mm, r {:.1f} {:.1f} {:.1f} deg, score {:.3f}, cycle {} ms",
-                 p.ack_id, status_name(r.status), r.index + 1, r.count, r.pose->xyz_mm[0], r.pose->xyz_mm[1],
-                 r.pose->xyz_mm[2], r.pose->rxyz_deg[0], r.pose->rxyz_deg[1], r.pose->rxyz_deg[2], r.score,
-                 rec.command == std::uint16_t(reg::Command::locate) ? r.cycle_ms : 0);
+    spdlog::info(
+        "req {}: {} pose {}/{} x {:.1f} y {:.1f} z {:.1f} mm, r {:.1f} {:.1f} {:.1f} deg, score {:.3f}, "
+        "cycle {} ms",
+        p.ack_id, status_name(r.status), r.index + 1, r.count, r.pose->xyz_mm[0], r.pose->xyz_mm[1],
+        r.pose->xyz_mm[2], r.pose->rxyz_deg[0], r.pose->rxyz_deg[1], r.pose->rxyz_deg[2], r.score,
+        rec.command == std::uint16_t(reg::Command::locate) ? r.cycle_ms : 0);
   else
     spdlog::info("req {}: {} (error {} {}), cycle {} ms", p.ack_id, status_name(r.status), int(r.error),
                  error_name(r.error), r.cycle_ms);
@@ -52,13 +47,13 @@ void log_result(const Published& p, const CycleRecord& rec) {
 
 struct Options {
   std::string config, log_dir;
-  long cycles = 0;      // stop after this many commands (0: until a signal)
-  int trigger_ms = 0;   // plc.mode "none": LOCATE every this many ms
+  long cycles = 0;     // stop after this many commands (0: until a signal)
+  int trigger_ms = 0;  // plc.mode "none": LOCATE every this many ms
 };
 
 int serve(const Options& opt) {
   // init
-  AppConfig cfg = opt.config.empty() ? embedded_default() : load_config(opt.config);
+  AppConfig cfg = opt.config.empty() ? embedded_default_config() : load_config(opt.config);
   if (!opt.log_dir.empty()) cfg.log.dir = opt.log_dir;
   spdlog::info("pipeloc serve: config {}", cfg.path.empty() ? "(embedded default: simulated bin)" : cfg.path);
   for (const auto& line : describe_config(cfg)) spdlog::info("config: {}", line);
@@ -80,8 +75,8 @@ int serve(const Options& opt) {
                  cfg.plc.encoding.scaled_int32 ? "scaled int32" : "float32");
   } else if (cfg.plc.mode == "client") {
     client = std::make_unique<PlcClientLink>(cfg.plc);
-    spdlog::info("plc: polling the PLC at {}:{} every {} ms, registers from {}", cfg.plc.address, cfg.plc.port,
-                 cfg.plc.poll_ms, cfg.plc.base);
+    spdlog::info("plc: polling the PLC at {}:{} every {} ms, registers from {}", cfg.plc.address,
+                 cfg.plc.port, cfg.plc.poll_ms, cfg.plc.base);
   } else {
     spdlog::info("plc: none; LOCATE every {} ms", opt.trigger_ms);
   }
@@ -89,8 +84,8 @@ int serve(const Options& opt) {
   CycleRunner runner(service);
   {
     char rest[512];
-    std::snprintf(rest, sizeof rest, "\"source\":\"%s\",\"budget_ms\":%.1f,\"plc\":\"%s\"", cfg.source.kind.c_str(),
-                  cfg.service.budget_ms, cfg.plc.mode.c_str());
+    std::snprintf(rest, sizeof rest, "\"source\":\"%s\",\"budget_ms\":%.1f,\"plc\":\"%s\"",
+                  cfg.source.kind.c_str(), cfg.service.budget_ms, cfg.plc.mode.c_str());
     service.log().event("start", rest);
   }
   // activate
@@ -166,10 +161,13 @@ int serve(const Options& opt) {
 
 void add_serve(CLI::App& app) {
   auto opt = std::make_shared<Options>();
-  auto* cmd = app.add_subcommand("serve", "Run the service: PLC-triggered cycles on the configured frame source");
-  cmd->add_option("--config", opt->config, "TOML config (default: the embedded simulated bin, see config/demo.toml)");
+  auto* cmd =
+      app.add_subcommand("serve", "Run the service: PLC-triggered cycles on the configured frame source");
+  cmd->add_option("--config", opt->config,
+                  "TOML config (default: the embedded simulated bin, see config/demo.toml)");
   cmd->add_option("--log-dir", opt->log_dir, "timing log folder (overrides log.dir)");
-  cmd->add_option("--cycles", opt->cycles, "stop after this many commands (default: run until SIGTERM/SIGINT)")
+  cmd->add_option("--cycles", opt->cycles,
+                  "stop after this many commands (default: run until SIGTERM/SIGINT)")
       ->check(CLI::Range(0L, 1L << 40));
   cmd->add_option("--trigger-ms", opt->trigger_ms, "plc.mode \"none\": LOCATE every this many ms")
       ->check(CLI::Range(0, 3600000));

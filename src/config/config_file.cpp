@@ -17,13 +17,15 @@ namespace {
 // range, and records the value in effect; finish() rejects keys nobody asked for.
 class Section {
  public:
-  Section(const std::string& file, std::string name, const toml::table* table, std::vector<std::string>* effective)
+  Section(const std::string& file, std::string name, const toml::table* table,
+          std::vector<std::string>* effective)
       : file_(file), name_(std::move(name)), table_(table), effective_(effective) {}
 
   void real(const char* key, double* dst, double lo, double hi, const char* unit) {
     if (const toml::node* n = take(key)) {
       const auto v = n->value<double>();
-      if (!v || !n->is_number() || !(*v >= lo && *v <= hi)) fail(file_, full(key), range("a number", lo, hi, unit));
+      if (!v || !n->is_number() || !(*v >= lo && *v <= hi))
+        fail(file_, full(key), range("a number", lo, hi, unit));
       *dst = *v;
     }
     record(key, *dst, unit);
@@ -57,7 +59,8 @@ class Section {
       if (!v) fail(file_, full(key), expected);
       bool ok = choices.size() == 0 && (allow_empty || !v->empty());
       for (const char* c : choices) ok = ok || *v == c;
-      if (!ok) fail(file_, full(key), expected + (v->empty() ? " (got an empty string)" : ", got \"" + *v + "\""));
+      if (!ok)
+        fail(file_, full(key), expected + (v->empty() ? " (got an empty string)" : ", got \"" + *v + "\""));
       *dst = *v;
     }
     record(key, "\"" + *dst + "\"", "");
@@ -66,7 +69,8 @@ class Section {
   void numbers(const char* key, std::vector<double>* dst, std::size_t count, const char* unit) {
     if (const toml::node* n = take(key)) {
       const toml::array* a = n->as_array();
-      const std::string expected = "expected an array of " + std::to_string(count) + " numbers (" + unit + ")";
+      const std::string expected =
+          "expected an array of " + std::to_string(count) + " numbers (" + unit + ")";
       if (!a || a->size() != count) fail(file_, full(key), expected);
       dst->clear();
       for (const toml::node& e : *a) {
@@ -90,7 +94,8 @@ class Section {
     if (!table_) return;
     for (const auto& [key, node] : *table_) {
       if (node.is_table()) continue;  // a sub-section, read by its own Section
-      if (!taken_.count(std::string(key.str()))) fail(file_, full(std::string(key.str()).c_str()), "unknown key");
+      if (!taken_.count(std::string(key.str())))
+        fail(file_, full(std::string(key.str()).c_str()), "unknown key");
     }
   }
   const std::string& file() const { return file_; }
@@ -175,11 +180,13 @@ void read_model(Section& s, const std::string& file, ModelConfig* m) {
     m->stl = (std::filesystem::path(file).parent_path() / m->stl).lexically_normal().string();
 }
 
-void read_source(const std::string& file, const toml::table* t, std::vector<std::string>* eff, SourceConfig* c) {
+void read_source(const std::string& file, const toml::table* t, std::vector<std::string>* eff,
+                 SourceConfig* c) {
   auto sub = [&](const char* name) -> const toml::table* {
     if (!t) return nullptr;
     const toml::node* n = t->get(name);
-    if (n && !n->is_table()) fail(file, std::string("source.") + name, "expected a [source." + std::string(name) + "] table");
+    if (n && !n->is_table())
+      fail(file, std::string("source.") + name, "expected a [source." + std::string(name) + "] table");
     return n ? n->as_table() : nullptr;
   };
   Section s(file, "source", t, eff);
@@ -210,7 +217,8 @@ void read_source(const std::string& file, const toml::table* t, std::vector<std:
   relative_to_file(&c->replay.path);
   relative_to_file(&c->replay.camera);
   if (c->kind == "replay" && c->replay.path.empty())
-    fail(file, "source.replay.path", "expected a BOP dataset or a folder of depth PNGs (source.kind is \"replay\")");
+    fail(file, "source.replay.path",
+         "expected a BOP dataset or a folder of depth PNGs (source.kind is \"replay\")");
 
   Section on(file, "source.openni2", sub("openni2"), eff);
   on.text("uri", &c->openni2.uri);
@@ -254,8 +262,11 @@ void read_all(const std::string& file, const toml::table& root, AppConfig* cfg) 
   for (const auto& [key, node] : root) {
     bool known = false;
     for (const char* s : kSections) known = known || key.str() == s;
-    if (!known) fail(file, std::string(key.str()), "unknown section (expected [model], [locate], [source], [service], [plc] or [log])");
-    if (!node.is_table()) fail(file, std::string(key.str()), "expected a [" + std::string(key.str()) + "] table");
+    if (!known)
+      fail(file, std::string(key.str()),
+           "unknown section (expected [model], [locate], [source], [service], [plc] or [log])");
+    if (!node.is_table())
+      fail(file, std::string(key.str()), "expected a [" + std::string(key.str()) + "] table");
   }
   auto table = [&](const char* name) { return root.get_as<toml::table>(name); };
   auto* eff = &cfg->effective;
@@ -306,6 +317,14 @@ AppConfig load_config(const std::string& path) {
 AppConfig default_config() {
   AppConfig cfg;
   read_all("", toml::table{}, &cfg);
+  return cfg;
+}
+
+AppConfig embedded_default_config() {
+  AppConfig cfg = default_config();
+  cfg.model.preset = "sbend";
+  for (std::string& line : cfg.effective)
+    if (line.rfind("model.preset = ", 0) == 0) line = "model.preset = \"sbend\"";
   return cfg;
 }
 

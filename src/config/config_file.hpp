@@ -27,14 +27,14 @@ struct ModelConfig {
 struct SimSourceConfig {
   int pipes = 20;
   int seed = 1;
-  double tilt_deg = 0;  // camera tilt from vertical, drawn in [0, this] per bin
-  bool refill = true;   // a new bin when the last pipe has been picked
+  double tilt_deg = 0;     // camera tilt from vertical, drawn in [0, this] per bin
+  bool refill = true;      // a new bin when the last pipe has been picked
   std::string truth_file;  // if set: one JSON line per frame with every pipe's true pose (tests, demo)
 };
 
 struct ReplaySourceConfig {
-  std::string path;    // a BOP dataset (test/SSSSSS/depth/*.png) or a folder of depth PNGs
-  std::string camera;  // scene_camera.json for a folder of PNGs (its first entry serves all)
+  std::string path;       // a BOP dataset (test/SSSSSS/depth/*.png) or a folder of depth PNGs
+  std::string camera;     // scene_camera.json for a folder of PNGs (its first entry serves all)
   int max_frames = 1000;  // frames held in memory (read and checked at start-up)
 };
 
@@ -43,8 +43,8 @@ struct OpenNi2SourceConfig {
   // Used when the device reports no field of view (the Dummy device): scaled to its resolution.
   double fx = 570.3, fy = 570.3, cx = 319.5, cy = 239.5;
   int calib_width = 640, calib_height = 480;
-  int frame_timeout_ms = 500;   // no frame in this time: sensor unavailable
-  int reopen_interval_ms = 1000;  // a lost device is reopened at most this often
+  int frame_timeout_ms = 500;        // no frame in this time: sensor unavailable
+  int reopen_interval_ms = 1000;     // a lost device is reopened at most this often
   std::vector<double> world_to_cam;  // optional 16 values, row-major, mm: the bin frame (Z up)
 };
 
@@ -56,18 +56,18 @@ struct SourceConfig {
 };
 
 struct ServiceConfig {
-  double budget_ms = 250;    // trigger to result; localization stops early to keep it
-  int summary_every = 100;   // cycles between summary lines in the timing log
+  double budget_ms = 250;   // trigger to result; localization stops early to keep it
+  int summary_every = 100;  // cycles between summary lines in the timing log
 };
 
 struct PlcConfig {
   std::string mode = "server";  // server | client | none
   std::string address = "127.0.0.1";
   int port = 1502;
-  int base = 0;          // first holding register of the map
-  int unit_id = 1;       // client mode: the PLC's unit identifier
-  int max_clients = 8;   // server mode: connections served at once
-  int poll_ms = 50;      // client mode: how often CMD/REQ_ID are read
+  int base = 0;                 // first holding register of the map
+  int unit_id = 1;              // client mode: the PLC's unit identifier
+  int max_clients = 8;          // server mode: connections served at once
+  int poll_ms = 50;             // client mode: how often CMD/REQ_ID are read
   int reconnect_max_ms = 5000;  // client mode: backoff cap
   int byte_timeout_ms = 100;    // a request that stalls longer mid-frame is dropped
   reg::Encoding encoding;
@@ -97,6 +97,9 @@ struct AppConfig {
 AppConfig load_config(const std::string& path);
 // The built-in defaults, as if from an empty file.
 AppConfig default_config();
+// What runs without --config: the defaults with the S-bend preset as the pipe (a simulated bin,
+// Modbus server on 127.0.0.1:1502; config/demo.toml spells it out).
+AppConfig embedded_default_config();
 // Every value in effect, one "section.key = value" line each, for the start-up log.
 std::vector<std::string> describe_config(const AppConfig& cfg);
 

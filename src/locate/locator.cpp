@@ -6,10 +6,6 @@
 namespace pipeloc {
 namespace {
 
-double ms_since(Locator::Clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(Locator::Clock::now() - t0).count();
-}
-
 // IV-B: an initial state: the model turned about its axis (canonical start k), its measured
 // principal direction laid along the observed one in either direction, its measured centre on
 // the observed centre.
@@ -85,10 +81,7 @@ const LocateOutput& Locator::locate(const Image<float>& depth, const CameraInfo&
   const Pose bin_to_cam = bin_to_camera(camera);
   // Anytime: what is not expected to finish before the deadline is not started. The expected
   // durations are running averages of earlier cycles (none yet: everything is tried).
-  const auto expected = [](double ms) {
-    return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double, std::milli>(ms));
-  };
-  if (deadline != Clock::time_point::max() && t_start + expected(serial_ms_avg_) > deadline) {
+  if (deadline != Clock::time_point::max() && t_start + ms_duration(serial_ms_avg_) > deadline) {
     out_.budget_exhausted = true;
     out_.times.total_ms = ms_since(t_start);
     return out_;
@@ -128,9 +121,10 @@ const LocateOutput& Locator::locate(const Image<float>& depth, const CameraInfo&
   for (Worker& wk : workers_) wk.times = {};
   constexpr double kAverageWeight = 0.2;
   const double serial_ms = ms_since(t_start);
-  serial_ms_avg_ = serial_ms_avg_ == 0 ? serial_ms : (1 - kAverageWeight) * serial_ms_avg_ + kAverageWeight * serial_ms;
+  serial_ms_avg_ =
+      serial_ms_avg_ == 0 ? serial_ms : (1 - kAverageWeight) * serial_ms_avg_ + kAverageWeight * serial_ms;
   const Clock::time_point start_by =
-      deadline == Clock::time_point::max() ? deadline : deadline - expected(candidate_ms_avg_);
+      deadline == Clock::time_point::max() ? deadline : deadline - ms_duration(candidate_ms_avg_);
   Frame frame{this, &depth, &camera, bin_to_cam, start_by, deadline};
   for (Worker& wk : workers_) wk.candidates_done = 0, wk.candidate_ms_sum = 0;
   pool_.run(n, &Locator::candidate_task, &frame);
@@ -138,8 +132,9 @@ const LocateOutput& Locator::locate(const Image<float>& depth, const CameraInfo&
   double done_ms = 0;
   for (const Worker& wk : workers_) done += wk.candidates_done, done_ms += wk.candidate_ms_sum;
   if (done > 0)
-    candidate_ms_avg_ = candidate_ms_avg_ == 0 ? done_ms / done
-                                               : (1 - kAverageWeight) * candidate_ms_avg_ + kAverageWeight * done_ms / done;
+    candidate_ms_avg_ = candidate_ms_avg_ == 0
+                            ? done_ms / done
+                            : (1 - kAverageWeight) * candidate_ms_avg_ + kAverageWeight * done_ms / done;
   for (const Worker& wk : workers_) {
     out_.times.axis_ms += wk.times.axis_ms;
     out_.times.ridge_icp_ms += wk.times.ridge_icp_ms;
@@ -225,8 +220,9 @@ void Locator::work_candidate(int c, Worker& wk, const Image<float>& depth, const
   const int turns = std::max(1, cfg_.initial_rotations);
   // The probes rank the starts on coarser ridges of the same region.
   const float probe_cell = float(std::max(cfg_.icp_probe_cell_mm, cfg_.ridge_cell_mm));
-  const int n_coarse = extract_zridge(wk.region_pts.data(), count, trace.axis.axis, probe_cell, 0.3f * d,
-                                      &wk.icp.ridge, wk.coarse_ridge.data(), ridge_capacity_, cfg_.match_surface);
+  const int n_coarse =
+      extract_zridge(wk.region_pts.data(), count, trace.axis.axis, probe_cell, 0.3f * d, &wk.icp.ridge,
+                     wk.coarse_ridge.data(), ridge_capacity_, cfg_.match_surface);
   for (int dir = 0; dir < 2; ++dir)
     for (int r = 0; r < turns; ++r)
       wk.fits.push_back(ridge_icp(lm_, initial_state(lm_, trace.axis, dir == 1, r), wk.coarse_ridge.data(),
@@ -245,8 +241,8 @@ void Locator::work_candidate(int c, Worker& wk, const Image<float>& depth, const
     const int left = std::max(1, cfg_.icp_max_iterations - f.iterations);
     const int fine = std::min(left, cfg_.icp_fine_iterations);
     if (left > fine)
-      f = ridge_icp(lm_, f.pose, wk.coarse_ridge.data(), n_coarse, trace.axis.axis, cfg_, left - fine, &wk.icp,
-                    f.gate_mm, probe_cell);
+      f = ridge_icp(lm_, f.pose, wk.coarse_ridge.data(), n_coarse, trace.axis.axis, cfg_, left - fine,
+                    &wk.icp, f.gate_mm, probe_cell);
     f = ridge_icp(lm_, f.pose, ridge, trace.ridge_count, trace.axis.axis, cfg_, fine, &wk.icp, f.gate_mm);
   }
   wk.fits.resize(std::size_t(keep));

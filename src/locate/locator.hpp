@@ -3,10 +3,10 @@
 #pragma once
 
 #include <atomic>
-#include <chrono>
 #include <vector>
 
 #include "core/camera.hpp"
+#include "core/clock.hpp"
 #include "core/worker_pool.hpp"
 #include "locate/icp.hpp"
 #include "locate/principal_axis.hpp"
@@ -71,8 +71,6 @@ struct LocateOutput {
 
 class Locator {
  public:
-  using Clock = std::chrono::steady_clock;
-
   Locator(const PipeModel& model, const LocateConfig& cfg, const Intrinsics& camera);
 
   // Localizes pipes in depth_mm (0 = no reading). Candidates are worked best first; when the

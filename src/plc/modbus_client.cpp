@@ -10,7 +10,9 @@ namespace pipeloc {
 
 PlcClientLink::PlcClientLink(const PlcConfig& cfg) : cfg_(cfg) {
   ctx_ = modbus_new_tcp(cfg.address.c_str(), cfg.port);
-  if (!ctx_) throw PlcError("plc.address '" + cfg.address + ":" + std::to_string(cfg.port) + "': " + modbus_strerror(errno));
+  if (!ctx_)
+    throw PlcError("plc.address '" + cfg.address + ":" + std::to_string(cfg.port) +
+                   "': " + modbus_strerror(errno));
   modbus_set_slave(ctx_, cfg.unit_id);
   const auto response_us = std::uint32_t(cfg.byte_timeout_ms) * 5000u;
   modbus_set_response_timeout(ctx_, response_us / 1000000u, response_us % 1000000u);

@@ -5,7 +5,6 @@
 // heartbeat moving again tells the PLC side the link is up.
 #pragma once
 
-#include <chrono>
 #include <cstdint>
 
 #include "config/config_file.hpp"
@@ -30,7 +29,6 @@ class PlcClientLink {
   long reconnects() const { return reconnects_; }
 
  private:
-  using Clock = std::chrono::steady_clock;
   bool connect();
   void disconnect(const char* why);
   bool flush();

@@ -101,7 +101,8 @@ void ModbusServer::accept_client() {
   inet_ntop(AF_INET, &addr.sin_addr, ip, sizeof ip);
   if (int(clients_.size()) >= cfg_.max_clients) {
     ++counters_.refused;
-    spdlog::warn("plc: refused a connection from {}: {} clients already (plc.max_clients)", ip, clients_.size());
+    spdlog::warn("plc: refused a connection from {}: {} clients already (plc.max_clients)", ip,
+                 clients_.size());
     ::close(fd);
     return;
   }
@@ -139,10 +140,12 @@ void set_server_timeouts(modbus_t* ctx, int byte_timeout_ms) {
   modbus_set_response_timeout(ctx, 0, 1000);
 }
 
-int reply_to_request(modbus_t* ctx, modbus_mapping_t* mapping, int base, const std::uint8_t* query, int length) {
+int reply_to_request(modbus_t* ctx, modbus_mapping_t* mapping, int base, const std::uint8_t* query,
+                     int length) {
   const int header = modbus_get_header_length(ctx);
   int first = 0, count = 0;
-  if (written_range(query, header, length, &first, &count) && (first < base || first + count > base + reg::kReqId + 1))
+  if (written_range(query, header, length, &first, &count) &&
+      (first < base || first + count > base + reg::kReqId + 1))
     // Only CMD and REQ_ID belong to the PLC; the rest is the service's.
     return modbus_reply_exception(ctx, query, MODBUS_EXCEPTION_ILLEGAL_DATA_ADDRESS);
   return modbus_reply(ctx, query, length, mapping);
@@ -168,7 +171,7 @@ bool ModbusServer::poll(int timeout_ms, int wake_fd, PlcRequest* req) {
   last_req_id_ = req_id;
   req->command = map()[reg::kCmd];
   req->req_id = req_id;
-  req->at = std::chrono::steady_clock::now();
+  req->at = Clock::now();
   return true;
 }
 

@@ -4,12 +4,12 @@
 // loses its own connection and costs the others nothing.
 #pragma once
 
-#include <chrono>
 #include <cstdint>
 #include <stdexcept>
 #include <vector>
 
 #include "config/config_file.hpp"
+#include "core/clock.hpp"
 #include "plc/register_map.hpp"
 
 typedef struct _modbus modbus_t;
@@ -24,13 +24,14 @@ struct PlcError : std::runtime_error {
 // A command the PLC submitted: REQ_ID changed.
 struct PlcRequest {
   std::uint16_t command = 0, req_id = 0;
-  std::chrono::steady_clock::time_point at{};
+  Clock::time_point at{};
 };
 
 // What the server does with one received request: an exception for writes outside CMD/REQ_ID,
 // else libmodbus's reply from the map (which answers reads outside it with exception 02).
 // Returns modbus_reply's result (-1: the connection failed). Used by the server and the fuzzer.
-int reply_to_request(modbus_t* ctx, modbus_mapping_t* mapping, int base, const std::uint8_t* query, int length);
+int reply_to_request(modbus_t* ctx, modbus_mapping_t* mapping, int base, const std::uint8_t* query,
+                     int length);
 // Timeouts of a server context: a stalled request costs at most byte_timeout_ms, and libmodbus's
 // flush before some exception replies (an unknown function code) sleeps 1 ms instead of its
 // default 0.5 s response timeout, which would stall every client.

@@ -36,7 +36,8 @@ GrabStatus check_frame(const Image<float>& depth, const Intrinsics& expected, do
     if (!std::isfinite(z) || z < 0) return GrabStatus::frame_invalid;
     valid += z > 0;
   }
-  return double(valid) >= min_valid_share * double(depth.pixels.size()) ? GrabStatus::ok : GrabStatus::frame_invalid;
+  return double(valid) >= min_valid_share * double(depth.pixels.size()) ? GrabStatus::ok
+                                                                        : GrabStatus::frame_invalid;
 }
 
 }  // namespace pipeloc

@@ -3,25 +3,23 @@
 // throw there, naming what is wrong); grab() runs in the cycle and returns a status instead.
 #pragma once
 
-#include <chrono>
 #include <cstdint>
 #include <memory>
 #include <string>
 
 #include "config/config_file.hpp"
 #include "core/camera.hpp"
+#include "core/clock.hpp"
 #include "core/image.hpp"
 #include "model/pipe_model.hpp"
 
 namespace pipeloc {
 
-using Clock = std::chrono::steady_clock;
-
 struct Frame {
   Image<float> depth_mm;  // sized once from the source's intrinsics; 0 = no reading
   CameraInfo camera;
   Clock::time_point captured{};
-  std::uint64_t sequence = 0;  // frames delivered by this source
+  std::uint64_t sequence = 0;   // frames delivered by this source
   int scene_id = 0, im_id = 0;  // where it came from (replay: the dataset's ids; otherwise 0, sequence)
 };
 
@@ -52,6 +50,7 @@ std::unique_ptr<FrameSource> open_frame_source(const AppConfig& cfg, const PipeM
 
 // A frame the localizer can work on: the right size, finite non-negative depths, and at least
 // min_valid_share of its pixels with a reading.
-GrabStatus check_frame(const Image<float>& depth_mm, const Intrinsics& expected, double min_valid_share = 0.02);
+GrabStatus check_frame(const Image<float>& depth_mm, const Intrinsics& expected,
+                       double min_valid_share = 0.02);
 
 }  // namespace pipeloc

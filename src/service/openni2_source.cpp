@@ -134,8 +134,8 @@ GrabStatus OpenNi2Source::grab(Clock::time_point after, Clock::time_point deadli
   }
   out->captured = Clock::now();
   const int w = d.frame.getWidth(), h = d.frame.getHeight();
-  if (w != intrinsics_.width || h != intrinsics_.height || out->depth_mm.width != w || out->depth_mm.height != h ||
-      d.frame.getDataSize() < int(sizeof(std::uint16_t)) * w * h)
+  if (w != intrinsics_.width || h != intrinsics_.height || out->depth_mm.width != w ||
+      out->depth_mm.height != h || d.frame.getDataSize() < int(sizeof(std::uint16_t)) * w * h)
     return GrabStatus::frame_invalid;
   const double unit_mm =
       d.frame.getVideoMode().getPixelFormat() == openni::PIXEL_FORMAT_DEPTH_100_UM ? 0.1 : 1.0;
@@ -157,9 +157,10 @@ GrabStatus OpenNi2Source::grab(Clock::time_point after, Clock::time_point deadli
 }
 
 std::string OpenNi2Source::describe() const {
-  return "openni2: " + device_name_ + " (uri \"" + cfg_.uri + "\"), " + std::to_string(intrinsics_.width) + "x" +
-         std::to_string(intrinsics_.height) + ", fx " + std::to_string(intrinsics_.fx) + " fy " +
-         std::to_string(intrinsics_.fy) + (cfg_.world_to_cam.size() == 16 ? ", bin frame from config" : ", camera frame");
+  return "openni2: " + device_name_ + " (uri \"" + cfg_.uri + "\"), " + std::to_string(intrinsics_.width) +
+         "x" + std::to_string(intrinsics_.height) + ", fx " + std::to_string(intrinsics_.fx) + " fy " +
+         std::to_string(intrinsics_.fy) +
+         (cfg_.world_to_cam.size() == 16 ? ", bin frame from config" : ", camera frame");
 }
 
 }  // namespace pipeloc

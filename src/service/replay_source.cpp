@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <filesystem>
-#include <thread>
 
 #include "io/bop.hpp"
 #include "io/png.hpp"
@@ -30,7 +29,8 @@ ReplaySource::ReplaySource(const ReplaySourceConfig& cfg) : cfg_(cfg) {
       if (cfg.camera.empty())
         throw SourceError("source.replay.camera: needed for a folder of PNGs (a scene_camera.json)");
       const auto cameras = read_scene_camera(cfg.camera);
-      if (cameras.empty()) throw SourceError("source.replay.camera '" + cfg.camera + "': no camera in the file");
+      if (cameras.empty())
+        throw SourceError("source.replay.camera '" + cfg.camera + "': no camera in the file");
       std::vector<fs::path> pngs;
       for (const auto& e : fs::directory_iterator(root))
         if (e.is_regular_file() && e.path().extension() == ".png") pngs.push_back(e.path());
@@ -58,13 +58,13 @@ void ReplaySource::add(const std::string& png, const CameraInfo& camera, int sce
     intrinsics_ = s.camera.intrinsics;
   else if (s.depth_mm.width != intrinsics_.width || s.depth_mm.height != intrinsics_.height)
     throw SourceError("source.replay: '" + png + "' is " + std::to_string(s.depth_mm.width) + "x" +
-                      std::to_string(s.depth_mm.height) + ", the first frame " + std::to_string(intrinsics_.width) +
-                      "x" + std::to_string(intrinsics_.height) + ": one sensor, one size");
+                      std::to_string(s.depth_mm.height) + ", the first frame " +
+                      std::to_string(intrinsics_.width) + "x" + std::to_string(intrinsics_.height) +
+                      ": one sensor, one size");
   frames_.push_back(std::move(s));
 }
 
-GrabStatus ReplaySource::grab(Clock::time_point after, Clock::time_point, Frame* out) {
-  while (Clock::now() <= after) std::this_thread::yield();
+GrabStatus ReplaySource::grab(Clock::time_point, Clock::time_point, Frame* out) {
   const Stored& s = frames_[next_];
   next_ = (next_ + 1) % frames_.size();
   if (out->depth_mm.pixels.size() != s.depth_mm.pixels.size()) return GrabStatus::frame_invalid;

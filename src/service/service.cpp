@@ -11,10 +11,6 @@
 namespace pipeloc {
 namespace {
 
-double ms_between(Clock::time_point a, Clock::time_point b) {
-  return std::chrono::duration<double, std::milli>(b - a).count();
-}
-
 std::uint16_t clamp_u16(double v) { return std::uint16_t(std::clamp(std::lround(v), 0L, 65535L)); }
 
 }  // namespace
@@ -23,11 +19,13 @@ PipeModel load_config_model(const AppConfig& cfg) {
   if (!cfg.model.stl.empty()) return load_pipe_model(cfg.model.stl);
   if (!cfg.model.preset.empty())
     return derive_pipe_model(make_pipe(pipe_preset(cfg.model.preset)), "preset " + cfg.model.preset);
-  throw ConfigError("config '" + cfg.path + "': model: expected model.stl (the pipe's STL, mm) or model.preset");
+  throw ConfigError("config '" + cfg.path +
+                    "': model: expected model.stl (the pipe's STL, mm) or model.preset");
 }
 
 Pose config_robot_from_camera(const PlcConfig& plc) {
-  return plc.robot_from_camera.size() == 16 ? pose_from_matrix_rowmajor(plc.robot_from_camera.data()) : Pose::Identity();
+  return plc.robot_from_camera.size() == 16 ? pose_from_matrix_rowmajor(plc.robot_from_camera.data())
+                                            : Pose::Identity();
 }
 
 Pose config_grasp(const ModelConfig& m, EulerConvention euler) {
@@ -67,9 +65,7 @@ void Service::present(int index) {
 }
 
 const reg::Result& Service::run(std::uint16_t command, std::uint16_t req_id, Clock::time_point trigger) {
-  const double unix_ms =
-      std::chrono::duration<double, std::milli>(std::chrono::system_clock::now().time_since_epoch()).count() -
-      ms_between(trigger, Clock::now());
+  const double unix_ms = unix_ms_now() - ms_since(trigger);
   record_ = CycleRecord{};
   record_.command = command;
   record_.req_id = req_id;
@@ -118,11 +114,11 @@ void Service::locate(Clock::time_point trigger) {
   ++cycles_;
   ranked_.clear();
   index_ = -1;
-  const auto budget = std::chrono::duration_cast<Clock::duration>(
-      std::chrono::duration<double, std::milli>(cfg_.service.budget_ms));
-  const Clock::time_point deadline = trigger + budget;
+  const Clock::time_point deadline = trigger + ms_duration(cfg_.service.budget_ms);
 
   GrabStatus grab = source_->grab(trigger, deadline, &frame_);
+  // A frame from before the trigger is never localized: it could show a pipe already picked.
+  if (grab == GrabStatus::ok && frame_.captured <= trigger) grab = GrabStatus::frame_invalid;
   if (grab == GrabStatus::ok) grab = check_frame(frame_.depth_mm, source_->intrinsics());
   const Clock::time_point grabbed = Clock::now();
   record_.grab = grab;
@@ -130,12 +126,12 @@ void Service::locate(Clock::time_point trigger) {
   record_.frame_sequence = frame_.sequence;
   if (grab != GrabStatus::ok) {
     result_.status = reg::Status::error;
-    result_.error = grab == GrabStatus::sensor_unavailable ? reg::Error::sensor_unavailable : reg::Error::frame_invalid;
+    result_.error =
+        grab == GrabStatus::sensor_unavailable ? reg::Error::sensor_unavailable : reg::Error::frame_invalid;
   } else {
     // The localizer stops taking up candidates a little before the deadline, so that what is
     // in flight and the publishing still fit the budget.
-    const auto margin = std::chrono::duration_cast<Clock::duration>(
-        std::chrono::duration<double, std::milli>(std::min(5.0, 0.1 * cfg_.service.budget_ms)));
+    const auto margin = ms_duration(std::min(5.0, 0.1 * cfg_.service.budget_ms));
     const LocateOutput& out = locator_.locate(frame_.depth_mm, frame_.camera, deadline - margin);
     for (const PipeEstimate& e : out.estimates) {
       if (!e.pickable || int(ranked_.size()) >= cfg_.locate.max_results) continue;

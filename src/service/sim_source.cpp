@@ -1,7 +1,6 @@
 #include "service/sim_source.hpp"
 
 #include <cstdio>
-#include <thread>
 
 #include "score/mssd.hpp"
 #include "sim/pile.hpp"
@@ -16,7 +15,8 @@ SimSource::SimSource(const PipeModel& model, const SimSourceConfig& cfg)
     : model_(model), cfg_(cfg), rng_(std::uint32_t(cfg.seed)) {
   params_.pile.pipes = cfg.pipes;
   params_.max_tilt_deg = cfg.tilt_deg;
-  for (std::size_t i = 0; i < model.mesh.vertices.size(); i += 4) vertices_.push_back(model.mesh.vertices[i].cast<double>());
+  for (std::size_t i = 0; i < model.mesh.vertices.size(); i += 4)
+    vertices_.push_back(model.mesh.vertices[i].cast<double>());
   if (!cfg.truth_file.empty() && !(truth_ = std::fopen(cfg.truth_file.c_str(), "w")))
     throw SourceError("source.sim.truth_file '" + cfg.truth_file + "': cannot write");
   fill_bin();
@@ -53,9 +53,8 @@ void SimSource::render() {
   view_ = prepare_sensor_view(camera, projector, params_.intrinsics, params_.sensor);
 }
 
-GrabStatus SimSource::grab(Clock::time_point after, Clock::time_point, Frame* out) {
-  // The simulated sensor exposes now: the frame is always newer than the trigger.
-  while (Clock::now() <= after) std::this_thread::yield();
+GrabStatus SimSource::grab(Clock::time_point, Clock::time_point, Frame* out) {
+  // The simulated sensor exposes now, after the trigger.
   apply_sensor_noise(view_, params_.intrinsics, params_.sensor, int(pile_.size()), rng_, &out->depth_mm);
   out->camera.intrinsics = params_.intrinsics;
   out->camera.depth_scale = 1.0;
@@ -94,8 +93,9 @@ std::vector<Pose> SimSource::pipes_in_camera() const {
 
 std::string SimSource::describe() const {
   char text[256];
-  std::snprintf(text, sizeof text, "sim: %d pipes of %s per bin, seed %d, camera tilt up to %.1f deg, %dx%d, %s",
-                cfg_.pipes, model_.source.c_str(), cfg_.seed, cfg_.tilt_deg, params_.intrinsics.width,
+  std::snprintf(text, sizeof text,
+                "sim: %d pipes of %s per bin, seed %d, camera tilt up to %.1f deg, %dx%d, %s", cfg_.pipes,
+                model_.source.c_str(), cfg_.seed, cfg_.tilt_deg, params_.intrinsics.width,
                 params_.intrinsics.height, cfg_.refill ? "refilled when empty" : "not refilled");
   return text;
 }

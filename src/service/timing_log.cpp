@@ -6,14 +6,11 @@
 #include <filesystem>
 #include <stdexcept>
 
+#include "core/clock.hpp"
 #include "service/cycle.hpp"
 
 namespace pipeloc {
 namespace {
-
-double unix_ms_now() {
-  return std::chrono::duration<double, std::milli>(std::chrono::system_clock::now().time_since_epoch()).count();
-}
 
 double quantile_sorted(const std::vector<double>& v, double q) {
   return v.empty() ? 0.0 : v[std::size_t(q * double(v.size() - 1) + 0.5)];
@@ -62,7 +59,9 @@ TimingLog::TimingLog(const LogConfig& cfg, int summary_every) : cfg_(cfg), summa
   std::filesystem::create_directories(cfg.dir, ec);
   path_ = (std::filesystem::path(cfg.dir) / "timing.jsonl").string();
   file_ = std::fopen(path_.c_str(), "a");
-  if (!file_) throw std::runtime_error("log.dir '" + cfg.dir + "': cannot write " + path_ + ": " + std::strerror(errno));
+  if (!file_)
+    throw std::runtime_error("log.dir '" + cfg.dir + "': cannot write " + path_ + ": " +
+                             std::strerror(errno));
   bytes_ = std::ftell(file_);
   window_.reserve(std::size_t(summary_every));
   sorted_.reserve(std::size_t(summary_every));
@@ -98,8 +97,8 @@ void TimingLog::rotate() {
 }
 
 void TimingLog::event(const char* name, const char* rest) {
-  const int n = std::snprintf(line_, sizeof line_, "{\"event\":\"%s\",\"unix_ms\":%.0f%s%s}\n", name, unix_ms_now(),
-                              *rest ? "," : "", rest);
+  const int n = std::snprintf(line_, sizeof line_, "{\"event\":\"%s\",\"unix_ms\":%.0f%s%s}\n", name,
+                              unix_ms_now(), *rest ? "," : "", rest);
   put(line_, n);
 }
 
@@ -129,7 +128,8 @@ void TimingLog::write(const CycleRecord& r) {
       (unsigned long long)r.frame_sequence, grab_status_name(r.grab), r.grab_ms, r.frame_age_ms, t.zbuffer_ms,
       t.normals_ms, t.regions_ms, t.axis_ms, t.ridge_icp_ms, t.refine_ms, t.verify_ms, t.total_ms, r.cycle_ms,
       r.budget_ms, r.budget_ms > 0 ? r.cycle_ms / r.budget_ms : 0.0, r.budget_exhausted ? "true" : "false",
-      r.candidates, r.tried, r.accepted, r.count, double(r.score), status_name(r.status), error_name(r.error));
+      r.candidates, r.tried, r.accepted, r.count, double(r.score), status_name(r.status),
+      error_name(r.error));
   put(line_, n);
   if (r.command != std::uint16_t(reg::Command::locate)) return;
   window_.push_back(r.cycle_ms);

@@ -1,0 +1,23 @@
+// The one clock of the cycle and its conversions to and from milliseconds.
+#pragma once
+
+#include <chrono>
+
+namespace pipeloc {
+
+using Clock = std::chrono::steady_clock;
+
+inline double ms_between(Clock::time_point a, Clock::time_point b) {
+  return std::chrono::duration<double, std::milli>(b - a).count();
+}
+inline double ms_since(Clock::time_point t0) { return ms_between(t0, Clock::now()); }
+inline Clock::duration ms_duration(double ms) {
+  return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double, std::milli>(ms));
+}
+// Wall-clock time (for logs a person reads), ms since the Unix epoch.
+inline double unix_ms_now() {
+  return std::chrono::duration<double, std::milli>(std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+}  // namespace pipeloc
