@@ -80,10 +80,11 @@ TEST(Normals, RowBandsGiveTheSameNormalsAsOnePass) {
   compute_normals(zb, 7, 20, &one);
   const int cuts[] = {0, 17, 41, zb.height};
   for (int b = 0; b < 3; ++b)
-    compute_normals_rows(zb, 7, 20, cuts[b], cuts[b + 1], banded.column.data() + std::size_t(b) * 9 * zb.z.width,
-                         &banded);
+    compute_normals_rows(zb, 7, 20, cuts[b], cuts[b + 1],
+                         banded.column.data() + std::size_t(b) * 9 * zb.z.width, &banded);
   for (int j = 0; j < zb.height; ++j)
-    for (int i = 0; i < zb.width; ++i) EXPECT_LT((one.n.at(i, j) - banded.n.at(i, j)).norm(), 1e-5f) << i << "," << j;
+    for (int i = 0; i < zb.width; ++i)
+      EXPECT_LT((one.n.at(i, j) - banded.n.at(i, j)).norm(), 1e-5f) << i << "," << j;
 }
 
 // A frame of one pipe lying alone in the bin, with the sensor model's noise.
@@ -159,6 +160,58 @@ TEST(RidgeIcp, ConvergesFromThePapersRanges) {
       EXPECT_LT(pose_error(model, ref.pose, truth), 5.0) << deg << " deg, " << shift << " mm";
     }
   }
+}
+
+// Beyond the paper: a start placed beside the pipe (one leg of the U onto the other) or along it
+// is slid back over the observed ridge before ICP.
+TEST(StartSlide, BringsAnOffsetStartBackOverTheObservedRidge) {
+  OnePipe s = one_pipe("u", 3);
+  const PipeModel& model = preset_model("u");
+  Locator loc(model, s.cfg, s.scene.camera.intrinsics);
+  const LocateOutput& out = loc.locate(s.scene.depth_mm, s.scene.camera);
+  ASSERT_GE(out.traces.size(), 1u);
+  const CandidateTrace& t = out.traces[0];
+  ASSERT_GE(t.ridge_count, 10);
+  const LocatorModel& lm = loc.locator_model();
+  ASSERT_GT(lm.slide_across_mm, 2 * lm.tube_d_mm);  // a U is wider than two tubes
+  IcpBuffers buf;
+  reserve_icp(&buf, lm, 2000, float(s.cfg.ridge_cell_mm));
+  const Eigen::Vector3f* ridge = &loc.ridge_points()[std::size_t(t.ridge_begin)];
+  const float cell = float(s.cfg.icp_probe_cell_mm), d = lm.tube_d_mm;
+  buf.observed_top.build(ridge, t.ridge_count, 0.5f * cell, d);
+  const Pose truth = s.scene.model_to_world[0];
+  const Eigen::Vector2f along = t.axis.axis, across(-along.y(), along.x());
+  const float widest = std::floor(lm.slide_across_mm / d) * d;  // the furthest step across it takes
+  for (const Eigen::Vector2f& offset :
+       {Eigen::Vector2f(across * widest), Eigen::Vector2f(-across * 2 * d), Eigen::Vector2f(along * 2 * d),
+        Eigen::Vector2f(-along * 2 * d + across * d)}) {
+    Pose start = truth;
+    start.translation().head<2>() += offset.cast<double>();
+    const SlidStart slid = slide_start(lm, start, ridge, t.ridge_count, t.axis.axis, s.cfg, cell, &buf);
+    const double left = (slid.pose.translation() - truth.translation()).head<2>().norm();
+    EXPECT_LT(left, 0.5 * d) << offset.transpose();
+    EXPECT_LT(slid.cost_mm, 0.25f * d) << offset.transpose();
+  }
+}
+
+TEST(StartSlide, TopDistanceIsTheHorizontalDistanceUpToItsCap) {
+  TopDistance td;
+  td.reserve(64);
+  const Eigen::Vector3f pts[] = {{0, 0, 5}, {10, 0, 50}};
+  td.build(pts, 2, 1.0f, 20.0f);
+  EXPECT_NEAR(td.at(5, 0), 5.0f, 0.8f);  // between the two, heights aside
+  EXPECT_NEAR(td.at(10, 6), 6.0f, 0.8f);
+  EXPECT_FLOAT_EQ(td.at(0, 30), 20.0f);   // beyond the cap
+  EXPECT_FLOAT_EQ(td.at(500, 0), 20.0f);  // outside the grid
+}
+
+TEST(StartSlide, SeenThroughCountsOnlyPointsAboveAReadingDeeperThanTheTolerance) {
+  ZBuffer zb = synthetic_zbuffer(40, [](double i, double) { return i < 20 ? 0.0 : ZBuffer::kEmpty; });
+  const Eigen::Vector3f pts[] = {{5, 5, 10},    // 10 mm over the floor: seen through
+                                 {6, 5, 5},     // within the tolerance
+                                 {7, 5, -3},    // under the surface: hidden, not seen through
+                                 {30, 5, 10}};  // no reading there: says nothing
+  EXPECT_FLOAT_EQ(seen_through_share(zb, pts, 4, 7.0f), 0.25f);
 }
 
 SimulatedScene pile_of(const PipeModel& model, int pipes, unsigned seed) {

@@ -49,6 +49,7 @@ void add_locate(CLI::App& app) {
   struct Options {
     std::string depth, camera, model, overlay, config;
     int im_id = -1;
+    bool traces = false;
   };
   auto opt = std::make_shared<Options>();
   auto* cmd =
@@ -60,6 +61,8 @@ void add_locate(CLI::App& app) {
   cmd->add_option("--model", opt->model, "pipe STL (mm); default: [model] stl of the config");
   cmd->add_option("--overlay", opt->overlay, "write the overlay PNG here");
   cmd->add_option("--config", opt->config, "TOML config ([locate] thresholds)");
+  cmd->add_flag("--traces", opt->traces,
+                "also print one JSON line per candidate region: its outcome and the poses it reached");
   cmd->callback([opt] {
     const AppConfig app_cfg = config_or_default(opt->config);
     const LocateConfig& cfg = app_cfg.locate;
@@ -81,6 +84,26 @@ void add_locate(CLI::App& app) {
     const int pick = out.pick();
     for (std::size_t i = 0; i < out.estimates.size(); ++i)
       std::cout << estimate_json(out.estimates[i], int(i), int(i) == pick).dump() << '\n';
+    if (opt->traces) {
+      const Pose bin_to_cam = bin_to_camera(sized);
+      for (std::size_t c = 0; c < out.traces.size(); ++c) {
+        const CandidateTrace& tr = out.traces[c];
+        const Pose ridge_to_cam = bin_to_cam * tr.ridge_pose;
+        std::cout << Json{{"candidate", c},
+                          {"outcome", outcome_name(tr.outcome)},
+                          {"ridge_points", tr.ridge_count},
+                          {"ridge_residual_mm", tr.ridge_cost_mm},
+                          {"ridge_R", rotation_rowmajor(ridge_to_cam)},
+                          {"ridge_t_mm", translation_mm(ridge_to_cam)},
+                          {"refined_R", rotation_rowmajor(tr.refined_to_cam)},
+                          {"refined_t_mm", translation_mm(tr.refined_to_cam)},
+                          {"agreement", tr.check.agreement()},
+                          {"free_space", tr.check.free_space()},
+                          {"occluded", tr.check.occluded()}}
+                         .dump()
+                  << '\n';
+      }
+    }
     spdlog::info("{} pipes found ({} candidate regions, {} cores) in {:.1f} ms; pick: {}",
                  out.estimates.size(), out.regions.candidates, out.regions.cores_kept, out.times.total_ms,
                  pick >= 0 ? "rank " + std::to_string(pick) : std::string("none"));

@@ -144,6 +144,8 @@ void read_locate(Section& s, LocateConfig* c) {
   s.real("scan_step_deg", &c->scan_step_deg, 0.5, 45, "deg");
   s.real("ridge_cell_mm", &c->ridge_cell_mm, 0.5, 10, "mm");
   s.integer("initial_rotations", &c->initial_rotations, 1, 12, "states per direction");
+  s.real("initial_yaw_step_deg", &c->initial_yaw_step_deg, 1, 180, "deg");
+  s.real("start_slide_step_of_d", &c->start_slide_step_of_d, 0.1, 10, "x D");
   s.integer("icp_max_iterations", &c->icp_max_iterations, 1, 500, "iterations");
   s.integer("icp_probe_iterations", &c->icp_probe_iterations, 1, 500, "iterations");
   s.real("icp_probe_cell_mm", &c->icp_probe_cell_mm, 0.5, 20, "mm");

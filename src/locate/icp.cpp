@@ -31,10 +31,10 @@ int model_ridge(const LocatorModel& lm, const Pose& pose, const Eigen::Vector2f&
   const std::size_t step = stride * stride;
   int n = 0;
   for (std::size_t i = 0; i < lm.ridge_samples.size(); i += step)
-    if (lm.ridge_normals[i].dot(up_in_model) > -0.2f) buf->moved[std::size_t(n++)] = r * lm.ridge_samples[i] + t;
-  return extract_zridge(buf->moved.data(), n, axis, cell_mm, 0.3f * lm.tube_d_mm,
-                        &buf->ridge, buf->model_ridge.data(), int(buf->model_ridge.size()),
-                        cfg.match_surface);
+    if (lm.ridge_normals[i].dot(up_in_model) > -0.2f)
+      buf->moved[std::size_t(n++)] = r * lm.ridge_samples[i] + t;
+  return extract_zridge(buf->moved.data(), n, axis, cell_mm, 0.3f * lm.tube_d_mm, &buf->ridge,
+                        buf->model_ridge.data(), int(buf->model_ridge.size()), cfg.match_surface);
 }
 
 // Mean of min(distance, cap) from each of a to its nearest in b.
@@ -62,8 +62,72 @@ void reserve_icp(IcpBuffers* buf, const LocatorModel& lm, int max_ridge_points, 
   buf->model_ridge.assign(std::size_t(max_ridge_points), Eigen::Vector3f::Zero());
   buf->src.assign(std::size_t(2 * max_ridge_points), Eigen::Vector3f::Zero());
   buf->dst.assign(std::size_t(2 * max_ridge_points), Eigen::Vector3f::Zero());
+  // The top views span a pipe and a diameter of margin each side, in cells of half the finest ridge.
+  const int side = int((lm.extent_l_mm + 4 * lm.tube_d_mm) / (0.5f * ridge_cell_mm)) + 2;
+  buf->observed_top.reserve(side);
+  buf->model_top.reserve(side);
   reserve_ridge(&buf->ridge, lm.extent_l_mm + 2 * lm.tube_d_mm, ridge_cell_mm,
                 std::max(max_region_points, int(lm.ridge_samples.size())));
+}
+
+void TopDistance::build(const Eigen::Vector3f* pts, int n, float cell_mm, float cap_mm) {
+  cap = cap_mm;
+  float lo_x = 1e30f, lo_y = 1e30f, hi_x = -1e30f, hi_y = -1e30f;
+  for (int k = 0; k < n; ++k)
+    lo_x = std::min(lo_x, pts[k].x()), lo_y = std::min(lo_y, pts[k].y()), hi_x = std::max(hi_x, pts[k].x()),
+    hi_y = std::max(hi_y, pts[k].y());
+  if (n == 0) lo_x = lo_y = hi_x = hi_y = 0;
+  origin_x = lo_x - cap, origin_y = lo_y - cap;
+  // A wider set than the buffer was sized for gets coarser cells, not a bigger buffer.
+  const float span = std::max(hi_x - lo_x, hi_y - lo_y) + 2 * cap;
+  cell = std::max(cell_mm, span / float(capacity_side - 1));
+  width = std::min(capacity_side, int((hi_x - lo_x + 2 * cap) / cell) + 1);
+  height = std::min(capacity_side, int((hi_y - lo_y + 2 * cap) / cell) + 1);
+  std::fill_n(d.begin(), std::size_t(width) * height, cap);
+  const int r = int(cap / cell) + 1;
+  for (int k = 0; k < n; ++k) {
+    const int ci = int((pts[k].x() - origin_x) / cell), cj = int((pts[k].y() - origin_y) / cell);
+    for (int j = std::max(0, cj - r); j <= std::min(height - 1, cj + r); ++j)
+      for (int i = std::max(0, ci - r); i <= std::min(width - 1, ci + r); ++i) {
+        const float dx = origin_x + (float(i) + 0.5f) * cell - pts[k].x();
+        const float dy = origin_y + (float(j) + 0.5f) * cell - pts[k].y();
+        float& v = d[std::size_t(j) * width + i];
+        v = std::min(v, std::sqrt(dx * dx + dy * dy));
+      }
+  }
+}
+
+SlidStart slide_start(const LocatorModel& lm, const Pose& start, const Eigen::Vector3f* obs, int n_obs,
+                      const Eigen::Vector2f& axis, const LocateConfig& cfg, float cell_mm, IcpBuffers* buf) {
+  SlidStart out;
+  out.pose = start;
+  const int nm = model_ridge(lm, start, axis, cell_mm, cfg, buf);
+  if (nm == 0 || n_obs == 0) return out;
+  const float d = lm.tube_d_mm;
+  buf->model_top.build(buf->model_ridge.data(), nm, 0.5f * cell_mm, d);
+  const float step = std::max(float(cfg.start_slide_step_of_d) * d, float(cfg.zbuffer_pixel_mm));
+  const int n_across = int(lm.slide_across_mm / step), n_along = int(lm.slide_along_mm / (2 * step));
+  const Eigen::Vector2f across(-axis.y(), axis.x());
+  float best = 1e30f;
+  Eigen::Vector2f best_offset = Eigen::Vector2f::Zero();
+  for (int a = -n_along; a <= n_along; ++a)
+    for (int b = -n_across; b <= n_across; ++b) {
+      const Eigen::Vector2f offset = float(2 * a) * step * axis + float(b) * step * across;
+      float m2o = 0, o2m = 0;
+      for (int i = 0; i < nm; ++i) {
+        const Eigen::Vector3f& p = buf->model_ridge[std::size_t(i)];
+        m2o += buf->observed_top.at(p.x() + offset.x(), p.y() + offset.y());
+      }
+      for (int j = 0; j < n_obs; ++j)
+        o2m += buf->model_top.at(obs[j].x() - offset.x(), obs[j].y() - offset.y());
+      const float cost = 0.5f * (m2o / float(nm) + o2m / float(n_obs));
+      // Ties go to the smaller move (the measured centres agree when the whole pipe is seen).
+      if (cost < best - 1e-4f || (cost <= best + 1e-4f && offset.norm() < best_offset.norm()))
+        best = std::min(best, cost), best_offset = offset;
+    }
+  out.pose.translation().head<2>() += best_offset.cast<double>();
+  out.cost_mm = best;
+  return out;
 }
 
 Pose fit_rigid(const Eigen::Vector3f* src, const Eigen::Vector3f* dst, int n) {

@@ -10,11 +10,27 @@
 
 namespace pipeloc {
 
+// Top view distance to a point set: each cell holds the horizontal distance from its centre to
+// the nearest point, up to a cap. Looked up many times per start when sliding it.
+struct TopDistance {
+  float origin_x = 0, origin_y = 0, cell = 1, cap = 1;
+  int width = 0, height = 0, capacity_side = 0;
+  std::vector<float> d;
+  void reserve(int side) { capacity_side = side, d.assign(std::size_t(side) * side, 0.0f); }
+  void build(const Eigen::Vector3f* pts, int n, float cell_mm, float cap_mm);
+  float at(float x, float y) const {
+    const int i = int((x - origin_x) / cell), j = int((y - origin_y) / cell);
+    if (x < origin_x || y < origin_y || i >= width || j >= height) return cap;
+    return d[std::size_t(j) * width + i];
+  }
+};
+
 struct IcpBuffers {
   std::vector<Eigen::Vector3f> moved;        // model ridge samples at the current pose
   std::vector<Eigen::Vector3f> model_ridge;  // P_m
   std::vector<Eigen::Vector3f> src, dst;     // correspondences
   RidgeBuffers ridge;
+  TopDistance observed_top, model_top;  // for slide_start
 };
 
 // max_region_points: the most points an observed region passes to the Z-ridge.
@@ -26,12 +42,28 @@ struct RidgeFit {
   float cost_mm = 1e30f;         // mean truncated ridge distance, both ways
   int iterations = 0;
   int model_ridge_points = 0;
-  int matched = 0;    // model ridge points with an observed partner within D/2
-  float gate_mm = 0;  // correspondence gate reached (to resume from)
+  int matched = 0;         // model ridge points with an observed partner within D/2
+  float gate_mm = 0;       // correspondence gate reached (to resume from)
+  float seen_through = 0;  // share of the model's ridge where the sensor saw deeper (set by the caller)
+  // Ranks states: a ridge point the sensor saw through costs one more diameter, so a state lying
+  // over empty space (a U flipped onto its other leg) loses to one the image allows.
+  float rank_cost(float d) const { return cost_mm + seen_through * d; }
 };
 
 // Rigid transform taking src onto dst in the least-squares sense (Kabsch), fixed-size maths.
 Pose fit_rigid(const Eigen::Vector3f* src, const Eigen::Vector3f* dst, int n);
+
+// Beyond the paper: an observed region is often only part of its pipe (an end hidden, one leg
+// of a U), so its measured centre need not be the model's. The start is slid in the bin plane,
+// along and across the observed axis over the model's own extent, to where its ridge best covers
+// the observed one (mean distance both ways, truncated at D); ICP then starts from there.
+struct SlidStart {
+  Pose pose = Pose::Identity();
+  float cost_mm = 1e30f;  // mean truncated ridge distance, both ways, at the best offset
+};
+SlidStart slide_start(const LocatorModel& lm, const Pose& start, const Eigen::Vector3f* observed_ridge,
+                      int n_observed, const Eigen::Vector2f& axis, const LocateConfig& cfg, float cell_mm,
+                      IcpBuffers* buf);
 
 // One run of Algorithm 2's inner loop from `start`.
 // `gate_mm` < 0 starts the correspondence gate at L/3 (a cold start). `cell_mm` is the ridge

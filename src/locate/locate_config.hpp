@@ -14,8 +14,10 @@ struct LocateConfig {
   double normal_min_valid_share = 0.4;  // of the window's cells; fewer and the cell has no normal
 
   // II-B, Algorithm 1: candidate regions.
-  double upward_normal_max_deg = 45;  // core cells: N . Nv > cos(this) (N_th1); pipes resting on others tilt this far
-  double continuity_max_deg = 35;     // growth: N_i . N_j > cos(this); 3 sigma of two 7 mm plane fits plus the turn per cell
+  double upward_normal_max_deg =
+      45;  // core cells: N . Nv > cos(this) (N_th1); pipes resting on others tilt this far
+  double continuity_max_deg =
+      35;  // growth: N_i . N_j > cos(this); 3 sigma of two 7 mm plane fits plus the turn per cell
   double continuity_step_max_mm =
       8;  // growth: no jump between neighbours (3 sigma of the difference of two noisy cells at 1.1 m)
   double core_min_area_of_d2 = 0.75;    // A_th = this * D^2
@@ -32,12 +34,15 @@ struct LocateConfig {
 
   // IV: Z-ridge ICP from 2 x initial_rotations starts.
   double ridge_cell_mm = 2.0;
-  int initial_rotations = 6;  // 0/120/240 degrees about the axis
+  int initial_rotations = 6;         // turns about the axis: 0/60/.../300 degrees (IV-B's six initial states)
+  double initial_yaw_step_deg = 30;  // each start also turned about the vertical in these steps (180: not)
+  double start_slide_step_of_d =
+      1.0;  // initial states slid in steps of this * D across the axis, twice along
   int icp_max_iterations = 24;
-  int icp_probe_iterations = 6;  // every initial state gets this many ...
+  int icp_probe_iterations = 3;    // every initial state gets this many ...
   double icp_probe_cell_mm = 4.0;  // ... on ridges of this cell size (coarse: a quarter of the work)
-  int icp_continued_states = 4;  // ... and the best this many run to convergence,
-  int icp_fine_iterations = 8;   // the last this many on ridge_cell_mm, the others on the probe cells
+  int icp_continued_states = 4;    // ... and the best this many run to convergence,
+  int icp_fine_iterations = 8;     // the last this many on ridge_cell_mm, the others on the probe cells
   double icp_converged_mm = 0.05;
   double residual_max_of_d = 0.35;  // R_th = this * D (mean ridge distance; verification follows)
 

@@ -7,10 +7,10 @@ namespace pipeloc {
 namespace {
 
 // IV-B: an initial state: the model turned about its axis (canonical start k), its measured
-// principal direction laid along the observed one in either direction, its measured centre on
-// the observed centre.
-Pose initial_state(const LocatorModel& lm, const AxisEstimate& est, bool reverse, int k) {
-  double yaw = std::atan2(est.axis.y(), est.axis.x());
+// principal direction laid along the observed one in either direction, turned about the vertical
+// by yaw offset y, its measured centre on the observed centre.
+Pose initial_state(const LocatorModel& lm, const AxisEstimate& est, bool reverse, int k, int y) {
+  double yaw = std::atan2(est.axis.y(), est.axis.x()) + lm.yaw_offset_rad(y);
   if (reverse) yaw += M_PI;
   Pose place = Pose::Identity();
   place.linear() = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
@@ -60,7 +60,8 @@ Locator::Locator(const PipeModel& model, const LocateConfig& cfg, const Intrinsi
     reserve_icp(&wk.icp, lm_, ridge_capacity_, float(cfg.ridge_cell_mm), rb_.max_region_cells);
     wk.region_pts.assign(std::size_t(rb_.max_region_cells), Eigen::Vector3f::Zero());
     wk.coarse_ridge.assign(std::size_t(ridge_capacity_), Eigen::Vector3f::Zero());
-    wk.fits.reserve(std::size_t(2 * std::max(1, cfg.initial_rotations)));
+    wk.fits.reserve(lm_.canonical_starts.size() * std::size_t(2 * lm_.yaw_offsets));
+    wk.starts.reserve(wk.fits.capacity());
     wk.scratch_depth.resize(camera.width, camera.height, 0.0f);
   }
   ridge_pts_.assign(std::size_t(ridge_capacity_) * cfg.max_candidates, Eigen::Vector3f::Zero());
@@ -223,13 +224,33 @@ void Locator::work_candidate(int c, Worker& wk, const Image<float>& depth, const
   const int n_coarse =
       extract_zridge(wk.region_pts.data(), count, trace.axis.axis, probe_cell, 0.3f * d, &wk.icp.ridge,
                      wk.coarse_ridge.data(), ridge_capacity_, cfg_.match_surface);
+  // Every start is slid to where it best covers the observed ridge, then probed.
+  wk.starts.clear();
+  wk.icp.observed_top.build(wk.coarse_ridge.data(), n_coarse, 0.5f * probe_cell, d);
   for (int dir = 0; dir < 2; ++dir)
     for (int r = 0; r < turns; ++r)
-      wk.fits.push_back(ridge_icp(lm_, initial_state(lm_, trace.axis, dir == 1, r), wk.coarse_ridge.data(),
-                                  n_coarse, trace.axis.axis, cfg_, cfg_.icp_probe_iterations, &wk.icp, -1,
-                                  probe_cell));
-  std::sort(wk.fits.begin(), wk.fits.end(),
-            [](const RidgeFit& x, const RidgeFit& y) { return x.cost_mm < y.cost_mm; });
+      for (int y = 0; y < lm_.yaw_offsets; ++y)
+        wk.starts.push_back(slide_start(lm_, initial_state(lm_, trace.axis, dir == 1, r, y),
+                                        wk.coarse_ridge.data(), n_coarse, trace.axis.axis, cfg_, probe_cell,
+                                        &wk.icp));
+  for (const SlidStart& s : wk.starts) {
+    wk.fits.push_back(ridge_icp(lm_, s.pose, wk.coarse_ridge.data(), n_coarse, trace.axis.axis, cfg_,
+                                cfg_.icp_probe_iterations, &wk.icp, -1, probe_cell));
+    wk.fits.back().seen_through = seen_through(wk.fits.back(), wk);
+  }
+  const auto by_rank = [d](const RidgeFit& x, const RidgeFit& y) { return x.rank_cost(d) < y.rank_cost(d); };
+  std::sort(wk.fits.begin(), wk.fits.end(), by_rank);
+  // Several starts fall into the same basin: the states continued are distinct ones (more than
+  // a diameter apart), so that a runner-up basin, the right one as often as not, is not crowded out.
+  int distinct = 0;
+  for (std::size_t i = 0; i < wk.fits.size(); ++i) {
+    bool seen = false;
+    for (int j = 0; j < distinct && !seen; ++j)
+      seen = pose_distance_mm(lm_, wk.fits[i].pose, wk.fits[std::size_t(j)].pose) < d;
+    if (!seen)
+      std::rotate(wk.fits.begin() + distinct, wk.fits.begin() + long(i), wk.fits.begin() + long(i) + 1),
+          ++distinct;
+  }
   const int keep = std::min(int(wk.fits.size()), cfg_.icp_continued_states);
   for (int i = 0; i < keep; ++i) {
     if (out_of_time(deadline)) {
@@ -244,6 +265,7 @@ void Locator::work_candidate(int c, Worker& wk, const Image<float>& depth, const
       f = ridge_icp(lm_, f.pose, wk.coarse_ridge.data(), n_coarse, trace.axis.axis, cfg_, left - fine,
                     &wk.icp, f.gate_mm, probe_cell);
     f = ridge_icp(lm_, f.pose, ridge, trace.ridge_count, trace.axis.axis, cfg_, fine, &wk.icp, f.gate_mm);
+    f.seen_through = seen_through(f, wk);
   }
   wk.fits.resize(std::size_t(keep));
   if (out_of_time(deadline)) {
@@ -255,12 +277,12 @@ void Locator::work_candidate(int c, Worker& wk, const Image<float>& depth, const
   int refine_count = 0;
   for (int k = 0; k < count; k += stride)
     wk.region_pts[std::size_t(refine_count++)] = wk.region_pts[std::size_t(k)];
-  std::sort(wk.fits.begin(), wk.fits.end(),
-            [](const RidgeFit& x, const RidgeFit& y) { return x.cost_mm < y.cost_mm; });
+  std::sort(wk.fits.begin(), wk.fits.end(), by_rank);
   wk.times.ridge_icp_ms += ms_since(t);
   trace.ridge_pose = wk.fits[0].pose;
   trace.ridge_cost_mm = wk.fits[0].cost_mm;
-  if (wk.fits[0].cost_mm > float(cfg_.residual_max_of_d) * d) {
+  const float r_th = float(cfg_.residual_max_of_d) * d;
+  if (std::none_of(wk.fits.begin(), wk.fits.end(), [r_th](const RidgeFit& f) { return f.cost_mm <= r_th; })) {
     trace.outcome = CandidateOutcome::residual_too_high;
     return;
   }
@@ -274,10 +296,10 @@ void Locator::work_candidate(int c, Worker& wk, const Image<float>& depth, const
   auto quality = [](const Verification& v) { return v.agreement() - 2 * v.free_space(); };
   int tried = 0;
   for (std::size_t i = 0; i < wk.fits.size() && tried < cfg_.verify_hypotheses; ++i) {
-    if (wk.fits[i].cost_mm > float(cfg_.residual_max_of_d) * d) break;
+    if (wk.fits[i].cost_mm > r_th) continue;
     bool seen = false;
     for (std::size_t j = 0; j < i && !seen; ++j)
-      seen = wk.fits[j].cost_mm <= float(cfg_.residual_max_of_d) * d &&
+      seen = wk.fits[j].cost_mm <= r_th &&
              pose_distance_mm(lm_, wk.fits[i].pose, wk.fits[j].pose) < float(cfg_.ambiguity_pose_mm);
     if (seen) continue;
     if (out_of_time(deadline)) return;  // an unchecked runner-up could hide an ambiguity
@@ -311,6 +333,7 @@ void Locator::work_candidate(int c, Worker& wk, const Image<float>& depth, const
   }
   PipeEstimate& e = best;
   trace.check = e.check;
+  trace.refined_to_cam = e.model_to_cam;
   if (e.check.agreement() < float(cfg_.verify_min_agreement) ||
       e.check.free_space() > float(cfg_.verify_max_free_space)) {
     trace.outcome = CandidateOutcome::not_confirmed;

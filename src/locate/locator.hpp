@@ -46,7 +46,8 @@ struct CandidateTrace {
   int ridge_begin = 0, ridge_count = 0;  // observed ridge points in Locator::ridge_points()
   Pose ridge_pose = Pose::Identity();    // after Algorithm 2, before refinement
   float ridge_cost_mm = 0;
-  Verification check;  // of the best refined fit
+  Pose refined_to_cam = Pose::Identity();  // the best refined fit, accepted or not
+  Verification check;                      // of the best refined fit
   CandidateOutcome outcome = CandidateOutcome::budget;
 };
 
@@ -96,6 +97,7 @@ class Locator {
     std::vector<Eigen::Vector3f> region_pts;
     std::vector<Eigen::Vector3f> coarse_ridge;  // the region's Z-ridge on the probes' cells
     std::vector<RidgeFit> fits;
+    std::vector<SlidStart> starts;
     Image<float> scratch_depth;
     StageTimes times;
     int candidates_done = 0;  // this cycle, for the running average of a candidate's time
@@ -113,6 +115,11 @@ class Locator {
   void work_candidate(int c, Worker& wk, const Image<float>& depth, const CameraInfo& camera,
                       const Pose& bin_to_cam, Clock::time_point deadline);
   void merge_estimate(int c);
+  // RidgeFit::seen_through of a fit ridge_icp has just returned (its model ridge is still in wk.icp).
+  float seen_through(const RidgeFit& f, const Worker& wk) const {
+    return seen_through_share(zb_, wk.icp.model_ridge.data(), f.model_ridge_points,
+                              float(cfg_.verify_tolerance_mm));
+  }
   bool out_of_time(Clock::time_point deadline) const {
     return (cancel_ && cancel_->load(std::memory_order_relaxed)) || Clock::now() >= deadline;
   }

@@ -77,6 +77,12 @@ LocatorModel prepare_locator_model(const PipeModel& model, float margin_mm, cons
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
   lm.axis = eig.eigenvectors().col(2).cast<float>();
   lm.up = eig.eigenvectors().col(0).cast<float>();
+  const Eigen::Vector3f side = eig.eigenvectors().col(1).cast<float>();
+  float side_lo = 1e30f, side_hi = -1e30f;
+  for (const auto& p : pts)
+    side_lo = std::min(side_lo, p.dot(side)), side_hi = std::max(side_hi, p.dot(side));
+  lm.slide_across_mm = std::max(0.0f, 0.5f * (side_hi - side_lo - lm.tube_d_mm));
+  lm.slide_along_mm = 0.25f * lm.extent_l_mm;
 
   // One ridge sample per 6 mm^2 of surface leaves few empty 2 mm ridge cells on the top half.
   const float area = model.mesh.surface_area();
@@ -138,6 +144,8 @@ LocatorModel prepare_locator_model(const PipeModel& model, float margin_mm, cons
   lying.row(0) = lm.axis.cast<double>().transpose();
   lying.row(2) = lm.up.cast<double>().transpose();
   lying.row(1) = lying.row(2).cross(lying.row(0));
+  lm.yaw_offsets = std::max(1, int(std::lround(180.0 / cfg.initial_yaw_step_deg)));
+  lm.yaw_step_rad = M_PI / lm.yaw_offsets;
   const int turns = std::max(1, cfg.initial_rotations);
   for (int k = 0; k < turns; ++k)
     lm.canonical_starts.push_back(canonical_start(

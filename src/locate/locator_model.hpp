@@ -18,11 +18,20 @@ struct LocatorModel {
   std::vector<Eigen::Vector3f> ridge_normals;  // their outward normals
   std::vector<Eigen::Vector3f> check_points;   // vertices spread over the part, for pose distances
   float tube_d_mm = 0, extent_l_mm = 0;
+  // How far an initial state may be slid to cover a partial view: across the principal axis,
+  // half the model's width beside the tube (one leg of a U onto the other); along it, L/4.
+  float slide_across_mm = 0, slide_along_mm = 0;
 
   // IV-B initial states, one per turn about the axis: the model lying turned by 360/turns * k,
   // placed so that its principal direction measured by III (the same cross-section count as on
   // the observed region, on its own top view) lies along +X and its measured centre at the origin.
   std::vector<Pose> canonical_starts;
+  // Beyond the paper: the principal direction of a partly hidden curved pipe can be far from that
+  // of the whole model, so each start is also turned about the vertical, in steps covering half a
+  // turn (the reversed direction covers the other half).
+  int yaw_offsets = 1;
+  double yaw_step_rad = 0;
+  double yaw_offset_rad(int y) const { return (y - yaw_offsets / 2) * yaw_step_rad; }
 
   // Voxel index: nearest surface sample of each voxel centre within `margin` of the surface.
   Eigen::Vector3f voxel_origin = Eigen::Vector3f::Zero();

@@ -11,6 +11,17 @@ Pose bin_to_camera(const CameraInfo& camera) {
   return p;
 }
 
+float seen_through_share(const ZBuffer& zb, const Eigen::Vector3f* pts, int n, float tol_mm) {
+  if (n == 0) return 0;
+  int through = 0;
+  for (int k = 0; k < n; ++k) {
+    const int i = int(round_nearest(float((pts[k].x() - zb.origin_x_mm) / zb.pixel_mm)));
+    const int j = int(round_nearest(float((pts[k].y() - zb.origin_y_mm) / zb.pixel_mm)));
+    through += zb.valid(i, j) && zb.z.at(i, j) < pts[k].z() - tol_mm;
+  }
+  return float(through) / float(n);
+}
+
 void reserve_zbuffer(ZBuffer* zb, double max_side_mm, double pixel_mm) {
   const int side = int(std::ceil(max_side_mm / pixel_mm)) + 1;
   zb->pixel_mm = pixel_mm;
@@ -22,7 +33,8 @@ int build_zbuffer(const Image<float>& depth, const Intrinsics& k, const Pose& bi
   const Eigen::Matrix3f r = bin_to_cam.linear().transpose().cast<float>();  // camera -> bin
   const Eigen::Vector3f t = (-bin_to_cam.linear().transpose() * bin_to_cam.translation()).cast<float>();
   const auto to_bin = [&](int u, int v, float d) -> Eigen::Vector3f {
-    return r * Eigen::Vector3f((u - float(k.cx)) * d / float(k.fx), (v - float(k.cy)) * d / float(k.fy), d) + t;
+    return r * Eigen::Vector3f((u - float(k.cx)) * d / float(k.fx), (v - float(k.cy)) * d / float(k.fy), d) +
+           t;
   };
   // Pass 1: extent of the valid points.
   float lo_x = 1e30f, lo_y = 1e30f, hi_x = -1e30f, hi_y = -1e30f;

@@ -41,6 +41,10 @@ void reserve_zbuffer(ZBuffer* zb, double max_side_mm, double pixel_mm);
 // sensor's pixels are not left with holes. Returns the number of valid depth pixels.
 int build_zbuffer(const Image<float>& depth_mm, const Intrinsics& k, const Pose& bin_to_cam, ZBuffer* zb);
 
+// Share of pts (bin frame) whose cell holds an observed height more than tol_mm below them: the
+// sensor saw through where they would be. Cells with no reading or a higher one say nothing.
+float seen_through_share(const ZBuffer& zb, const Eigen::Vector3f* pts, int n, float tol_mm);
+
 // Fills holes a few cells wide whose neighbours agree within max_spread_mm (glints on a ridge),
 // `passes` cells deep. scratch: one float per buffer cell.
 void fill_small_holes(ZBuffer* zb, int passes, float max_spread_mm, std::vector<float>* scratch);
