@@ -139,6 +139,7 @@ void read_locate(Section& s, LocateConfig* c) {
   s.real("region_min_extent_of_l", &c->region_min_extent_of_l, 0, 2, "x L");
   s.real("convexity_min_share", &c->convexity_min_share, 0, 1, "share");
   s.real("region_max_drop_of_d", &c->region_max_drop_of_d, 0.1, 5, "x D");
+  s.real("region_max_reach_of_d", &c->region_max_reach_of_d, 0.1, 100, "x D");
   s.real("section_width_min_of_d", &c->section_width_min_of_d, 0.1, 2, "x D");
   s.real("section_width_max_of_d", &c->section_width_max_of_d, 0.1, 3, "x D");
   s.real("scan_step_deg", &c->scan_step_deg, 0.5, 45, "deg");

@@ -104,7 +104,7 @@ SlidStart slide_start(const LocatorModel& lm, const Pose& start, const Eigen::Ve
   const int nm = model_ridge(lm, start, axis, cell_mm, cfg, buf);
   if (nm == 0 || n_obs == 0) return out;
   const float d = lm.tube_d_mm;
-  buf->model_top.build(buf->model_ridge.data(), nm, 0.5f * cell_mm, d);
+  buf->model_top.build(buf->model_ridge.data(), nm, cell_mm, d);
   const float step = std::max(float(cfg.start_slide_step_of_d) * d, float(cfg.zbuffer_pixel_mm));
   const int n_across = int(lm.slide_across_mm / step), n_along = int(lm.slide_along_mm / (2 * step));
   const Eigen::Vector2f across(-axis.y(), axis.x());

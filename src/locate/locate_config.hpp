@@ -24,6 +24,7 @@ struct LocateConfig {
   double core_max_extent_of_l = 1.15;   // a core longer than the pipe is not one pipe (bin rims, floor)
   double region_min_extent_of_l = 0.7;  // a of the paper
   double region_max_drop_of_d = 0.8;    // grown cells lie at most this far below their core
+  double region_max_reach_of_d = 1.0;   // ... and at most this far from it (steps of growth)
   double convexity_min_share =
       0.6;  // of the cells grown straight from a core, at least this share tilt away from it
 

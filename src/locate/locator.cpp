@@ -226,7 +226,7 @@ void Locator::work_candidate(int c, Worker& wk, const Image<float>& depth, const
                      wk.coarse_ridge.data(), ridge_capacity_, cfg_.match_surface);
   // Every start is slid to where it best covers the observed ridge, then probed.
   wk.starts.clear();
-  wk.icp.observed_top.build(wk.coarse_ridge.data(), n_coarse, 0.5f * probe_cell, d);
+  wk.icp.observed_top.build(wk.coarse_ridge.data(), n_coarse, probe_cell, d);
   for (int dir = 0; dir < 2; ++dir)
     for (int r = 0; r < turns; ++r)
       for (int y = 0; y < lm_.yaw_offsets; ++y)

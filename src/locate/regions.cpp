@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace pipeloc {
 namespace {
@@ -16,6 +17,7 @@ void reserve_regions(RegionBuffers* rb, const ZBuffer& zb, const LocateConfig& c
   const std::size_t cells = zb.z.pixels.size();
   rb->core_label.resize(zb.z.width, zb.z.height, -1);
   rb->stamp.resize(zb.z.width, zb.z.height, 0);
+  rb->reach.resize(zb.z.width, zb.z.height, 0);
   rb->ridge_z.resize(zb.z.width, zb.z.height, 0.0f);
   rb->queue.assign(cells, 0);
   rb->core_cells.assign(cells, 0);
@@ -59,6 +61,7 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
   const float cont_min = float(std::cos(cfg.continuity_max_deg * kDeg));
   const float step_max = float(cfg.continuity_step_max_mm);
   const float drop_max = float(cfg.region_max_drop_of_d) * d;
+  const int reach_max = std::max(1, int(cfg.region_max_reach_of_d * d / zb.pixel_mm));
   const float cell_area = float(zb.pixel_mm * zb.pixel_mm);
   const float area_min = float(cfg.core_min_area_of_d2) * d * d;
   const float core_extent_max = float(cfg.core_max_extent_of_l) * l;
@@ -111,56 +114,72 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
   // 2. Grow each core while the normal of a neighbour is close to that of the boundary cell.
   int region_pool = 0;
   for (int c = 0; c < n_cores && int(rb->candidates.size()) < cfg.max_candidates; ++c) {
-    const int stamp = ++rb->stamp_value;
+    // Growth is first held to region_max_reach_of_d * D from the core: a pipe's visible surface
+    // lies within about D/2 of its top strip, and a touching pipe then adds a band, not itself.
+    // A region too short that way (a top strip broken into pieces) is grown again without the
+    // limit, the paper's growth, and kept if it then neither leaks nor stays short.
     int* cells = &rb->region_cells[region_pool];
     int count = 0;
     Eigen::Vector3f centroid = Eigen::Vector3f::Zero();
-    for (int k = cores[c].begin; k < cores[c].end && count < rb->max_region_cells; ++k) {
-      cells[count++] = rb->core_cells[k];
-      rb->stamp.pixels[rb->core_cells[k]] = stamp;
-      rb->ridge_z.pixels[rb->core_cells[k]] = zb.z.pixels[rb->core_cells[k]];
-      centroid += zb.point(rb->core_cells[k] % w, rb->core_cells[k] / w);
-    }
-    centroid /= float(cores[c].end - cores[c].begin);
-    bool leaked = false;
-    const int core_count = cores[c].end - cores[c].begin;
-    int ring_cells = 0, ring_lower = 0;
-    for (int head = 0; head < count; ++head) {
-      const int ci = cells[head] % w, cj = cells[head] / w;
-      const Eigen::Vector3f& ni_n = nm.n.at(ci, cj);
-      const float zi = zb.z.at(ci, cj);
-      for (int k = 0; k < 8; ++k) {
-        const int ni = ci + kDi[k], nj = cj + kDj[k];
-        if (ni < 0 || nj < 0 || ni >= zb.width || nj >= zb.height) continue;
-        int& s = rb->stamp.at(ni, nj);
-        if (s == stamp) continue;
-        const Eigen::Vector3f& nn = nm.n.at(ni, nj);
-        if (nn.z() == 0 && nn.x() == 0) continue;  // no normal
-        if (nn.dot(ni_n) <= cont_min || std::abs(zb.z.at(ni, nj) - zi) > step_max) continue;
-        // The visible part of a pipe lies within about one diameter below its top: growth does
-        // not follow a smoothed edge down onto the floor or the pipe beneath.
-        const float top = rb->ridge_z.at(ci, cj);
-        if (zb.z.at(ni, nj) < top - drop_max) continue;
-        rb->ridge_z.at(ni, nj) = top;
-        if (count >= rb->max_region_cells) {
-          leaked = true;
-          break;
-        }
-        s = stamp;
-        cells[count++] = zb.index(ni, nj);
-        // Convex: beside the core the surface tilts away from it (plane-fit normals, not noisy heights).
-        if (head < core_count)
-          ++ring_cells, ring_lower += nn.x() * float(kDi[k]) + nn.y() * float(kDj[k]) > 0;
+    float extent = 0;
+    bool found = false;
+    for (int pass = 0; pass < 2 && !found; ++pass) {
+      const int reach_limit = pass == 0 ? reach_max : std::numeric_limits<int>::max() - 1;
+      const int stamp = ++rb->stamp_value;
+      count = 0;
+      centroid = Eigen::Vector3f::Zero();
+      for (int k = cores[c].begin; k < cores[c].end && count < rb->max_region_cells; ++k) {
+        cells[count++] = rb->core_cells[k];
+        rb->stamp.pixels[rb->core_cells[k]] = stamp;
+        rb->ridge_z.pixels[rb->core_cells[k]] = zb.z.pixels[rb->core_cells[k]];
+        rb->reach.pixels[rb->core_cells[k]] = 0;
+        centroid += zb.point(rb->core_cells[k] % w, rb->core_cells[k] / w);
       }
-      if (leaked) break;
+      centroid /= float(cores[c].end - cores[c].begin);
+      bool leaked = false;
+      const int core_count = cores[c].end - cores[c].begin;
+      int ring_cells = 0, ring_lower = 0;
+      for (int head = 0; head < count; ++head) {
+        const int ci = cells[head] % w, cj = cells[head] / w;
+        const Eigen::Vector3f& ni_n = nm.n.at(ci, cj);
+        const float zi = zb.z.at(ci, cj);
+        const int reach = rb->reach.at(ci, cj) + 1;
+        if (reach > reach_limit) continue;
+        for (int k = 0; k < 8; ++k) {
+          const int ni = ci + kDi[k], nj = cj + kDj[k];
+          if (ni < 0 || nj < 0 || ni >= zb.width || nj >= zb.height) continue;
+          int& s = rb->stamp.at(ni, nj);
+          if (s == stamp) continue;
+          const Eigen::Vector3f& nn = nm.n.at(ni, nj);
+          if (nn.z() == 0 && nn.x() == 0) continue;  // no normal
+          if (nn.dot(ni_n) <= cont_min || std::abs(zb.z.at(ni, nj) - zi) > step_max) continue;
+          // The visible part of a pipe lies within about one diameter below its top: growth does
+          // not follow a smoothed edge down onto the floor or the pipe beneath.
+          const float top = rb->ridge_z.at(ci, cj);
+          if (zb.z.at(ni, nj) < top - drop_max) continue;
+          rb->ridge_z.at(ni, nj) = top;
+          rb->reach.at(ni, nj) = reach;
+          if (count >= rb->max_region_cells) {
+            leaked = true;
+            break;
+          }
+          s = stamp;
+          cells[count++] = zb.index(ni, nj);
+          // Convex: beside the core the surface tilts away from it (plane-fit normals, not noisy heights).
+          if (head < core_count)
+            ++ring_cells, ring_lower += nn.x() * float(kDi[k]) + nn.y() * float(kDj[k]) > 0;
+        }
+        if (leaked) break;
+      }
+      if (leaked) break;  // spread over far more than one pipe: not a pipe lying on others
+      // A pipe's top is convex: the cells grown straight from its core tilt away from it. A patch of
+      // floor between pipes grows up their sides instead.
+      if (ring_cells == 0 || float(ring_lower) < float(cfg.convexity_min_share) * float(ring_cells)) break;
+      // 3. Keep regions longer than a * L.
+      extent = longest_distance(zb, cells, count);
+      found = extent > float(cfg.region_min_extent_of_l) * l;
     }
-    if (leaked) continue;  // spread over far more than one pipe: not a pipe lying on others
-    // A pipe's top is convex: the cells grown straight from its core tilt away from it. A patch of floor
-    // between pipes grows up their sides instead.
-    if (ring_cells == 0 || float(ring_lower) < float(cfg.convexity_min_share) * float(ring_cells)) continue;
-    // 3. Keep regions longer than a * L.
-    const float extent = longest_distance(zb, cells, count);
-    if (extent <= float(cfg.region_min_extent_of_l) * l) continue;
+    if (!found) continue;
     CandidateRegion r;
     r.core_begin = cores[c].begin;
     r.core_end = cores[c].end;

@@ -21,6 +21,7 @@ struct CandidateRegion {
 struct RegionBuffers {
   Image<int> core_label;  // -1 none, else core index (this frame)
   Image<int> stamp;       // growth visit marks
+  Image<int> reach;       // growth: steps from the core
   int stamp_value = 0;
   Image<float> ridge_z;                     // growth: height of the core cell each grown cell came from
   std::vector<int> queue;                   // BFS
