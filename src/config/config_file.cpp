@@ -148,6 +148,7 @@ void read_locate(Section& s, LocateConfig* c) {
   s.real("initial_yaw_step_deg", &c->initial_yaw_step_deg, 1, 180, "deg");
   s.real("start_slide_step_of_d", &c->start_slide_step_of_d, 0.1, 10, "x D");
   s.integer("icp_max_iterations", &c->icp_max_iterations, 1, 500, "iterations");
+  s.integer("icp_probed_states", &c->icp_probed_states, 1, 10000, "states");
   s.integer("icp_probe_iterations", &c->icp_probe_iterations, 1, 500, "iterations");
   s.real("icp_probe_cell_mm", &c->icp_probe_cell_mm, 0.5, 20, "mm");
   s.integer("icp_continued_states", &c->icp_continued_states, 1, 48, "states");

@@ -224,7 +224,7 @@ void Locator::work_candidate(int c, Worker& wk, const Image<float>& depth, const
   const int n_coarse =
       extract_zridge(wk.region_pts.data(), count, trace.axis.axis, probe_cell, 0.3f * d, &wk.icp.ridge,
                      wk.coarse_ridge.data(), ridge_capacity_, cfg_.match_surface);
-  // Every start is slid to where it best covers the observed ridge, then probed.
+  // Every start is slid to where it best covers the observed ridge.
   wk.starts.clear();
   wk.icp.observed_top.build(wk.coarse_ridge.data(), n_coarse, probe_cell, d);
   for (int dir = 0; dir < 2; ++dir)
@@ -233,6 +233,10 @@ void Locator::work_candidate(int c, Worker& wk, const Image<float>& depth, const
         wk.starts.push_back(slide_start(lm_, initial_state(lm_, trace.axis, dir == 1, r, y),
                                         wk.coarse_ridge.data(), n_coarse, trace.axis.axis, cfg_, probe_cell,
                                         &wk.icp));
+  // Only the starts whose slid ridge covers the observed one best are probed.
+  std::sort(wk.starts.begin(), wk.starts.end(),
+            [](const SlidStart& a, const SlidStart& b) { return a.cost_mm < b.cost_mm; });
+  if (int(wk.starts.size()) > cfg_.icp_probed_states) wk.starts.resize(std::size_t(cfg_.icp_probed_states));
   for (const SlidStart& s : wk.starts) {
     wk.fits.push_back(ridge_icp(lm_, s.pose, wk.coarse_ridge.data(), n_coarse, trace.axis.axis, cfg_,
                                 cfg_.icp_probe_iterations, &wk.icp, -1, probe_cell));

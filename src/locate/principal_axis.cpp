@@ -33,7 +33,8 @@ int count_sections(const ZBuffer& zb, const int* cells, int count, float theta, 
   std::fill_n(start, lines + 1, 0);
   for (int k = 0; k < count; ++k) ++start[buf->line[std::size_t(k)] - lmin + 1];
   for (int l = 0; l < lines; ++l) start[l + 1] += start[l];
-  for (int k = 0; k < count; ++k) buf->sorted[std::size_t(start[buf->line[std::size_t(k)] - lmin]++)] = buf->along[std::size_t(k)];
+  for (int k = 0; k < count; ++k)
+    buf->sorted[std::size_t(start[buf->line[std::size_t(k)] - lmin]++)] = buf->along[std::size_t(k)];
   // start[l] now ends line l: line l spans [start[l-1], start[l]).
   int sections = 0;
   for (int l = 0, b = 0; l < lines; b = start[l], ++l) {

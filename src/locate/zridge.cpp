@@ -33,7 +33,8 @@ int extract_zridge(const Eigen::Vector3f* pts, int count, const Eigen::Vector2f&
   const float inv_cell = 1.0f / cell;
   for (int k = 0; k < count; ++k) {
     const Eigen::Vector2f uv =
-        keep_uv ? rb->uv[std::size_t(k)] : Eigen::Vector2f(pts[k].head<2>().dot(axis), pts[k].head<2>().dot(across));
+        keep_uv ? rb->uv[std::size_t(k)]
+                : Eigen::Vector2f(pts[k].head<2>().dot(axis), pts[k].head<2>().dot(across));
     const int r = int((uv.x() - u0) * inv_cell);
     const int c = int((uv.y() - v0) * inv_cell);
     if (r < 0 || c < 0 || r >= rows || c >= cols) continue;
