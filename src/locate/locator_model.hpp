@@ -17,6 +17,9 @@ struct LocatorModel {
   std::vector<Eigen::Vector3f> ridge_samples;  // subset of surface samples for the Z-ridge
   std::vector<Eigen::Vector3f> ridge_normals;  // their outward normals
   std::vector<Eigen::Vector3f> check_points;   // vertices spread over the part, for pose distances
+  // The mesh verification renders: vertices merged on a grid of D/8 (within a pixel's footprint at
+  // the bin's depth, several times fewer triangles to draw per hypothesis).
+  Mesh verify_mesh;
   float tube_d_mm = 0, extent_l_mm = 0;
   // How far an initial state may be slid to cover a partial view: across the principal axis,
   // half the model's width beside the tube (one leg of a U onto the other); along it, L/4.
