@@ -65,7 +65,6 @@ void reserve_icp(IcpBuffers* buf, const LocatorModel& lm, int max_ridge_points, 
   // The top views span a pipe and a diameter of margin each side, in cells of half the finest ridge.
   const int side = int((lm.extent_l_mm + 4 * lm.tube_d_mm) / (0.5f * ridge_cell_mm)) + 2;
   buf->observed_top.reserve(side);
-  buf->model_top.reserve(side);
   reserve_ridge(&buf->ridge, lm.extent_l_mm + 2 * lm.tube_d_mm, ridge_cell_mm,
                 std::max(max_region_points, int(lm.ridge_samples.size())));
 }
@@ -97,29 +96,66 @@ void TopDistance::build(const Eigen::Vector3f* pts, int n, float cell_mm, float 
   }
 }
 
-SlidStart slide_start(const LocatorModel& lm, const Pose& start, const Eigen::Vector3f* obs, int n_obs,
-                      const Eigen::Vector2f& axis, const LocateConfig& cfg, float cell_mm, IcpBuffers* buf) {
+StartSet prepare_starts(const LocatorModel& lm, const LocateConfig& cfg) {
+  StartSet set;
+  set.cell_mm = float(std::max(cfg.icp_probe_cell_mm, cfg.ridge_cell_mm));
+  IcpBuffers buf;
+  const int capacity = int(3 * (lm.extent_l_mm + 2 * lm.tube_d_mm) / set.cell_mm) + 16;
+  reserve_icp(&buf, lm, capacity, set.cell_mm);
+  const int side = int((lm.extent_l_mm + 4 * lm.tube_d_mm) / set.cell_mm) + 2;
+  const Eigen::Vector2f x_axis = Eigen::Vector2f::UnitX();
+  set.ridge_begin.push_back(0);
+  for (int dir = 0; dir < 2; ++dir)
+    for (std::size_t k = 0; k < lm.canonical_starts.size(); ++k)
+      for (int y = 0; y < lm.yaw_offsets; ++y) {
+        Pose turn = Pose::Identity();
+        turn.linear() =
+            Eigen::AngleAxisd(dir * M_PI + lm.yaw_offset_rad(y), Eigen::Vector3d::UnitZ()).toRotationMatrix();
+        const Pose pose = turn * lm.canonical_starts[k];
+        const int n = model_ridge(lm, pose, x_axis, set.cell_mm, cfg, &buf);
+        const Pose to_model = pose.inverse();
+        for (int i = 0; i < n; ++i)
+          set.ridge_model.push_back(
+              (to_model * buf.model_ridge[std::size_t(i)].cast<double>()).cast<float>());
+        set.ridge_begin.push_back(int(set.ridge_model.size()));
+        set.top.emplace_back();
+        set.top.back().reserve(side);
+        set.top.back().build(buf.model_ridge.data(), n, set.cell_mm, lm.tube_d_mm);
+        set.pose.push_back(pose);
+      }
+  return set;
+}
+
+SlidStart slide_start(const LocatorModel& lm, const StartSet& starts, int s, const Pose& axis_to_bin,
+                      const Eigen::Vector3f* obs_axis, int n_obs, const LocateConfig& cfg, IcpBuffers* buf) {
   SlidStart out;
-  out.pose = start;
-  const int nm = model_ridge(lm, start, axis, cell_mm, cfg, buf);
+  out.start = s;
+  out.pose = axis_to_bin * starts.pose[std::size_t(s)];
+  const int nm = starts.ridge_count(s);
   if (nm == 0 || n_obs == 0) return out;
+  const Eigen::Matrix3f r = out.pose.linear().cast<float>();
+  const Eigen::Vector3f t = out.pose.translation().cast<float>();
+  const Eigen::Vector3f* ridge = starts.ridge(s);
+  for (int i = 0; i < nm; ++i) buf->model_ridge[std::size_t(i)] = r * ridge[i] + t;
+  const TopDistance& model_top = starts.top[std::size_t(s)];
   const float d = lm.tube_d_mm;
-  buf->model_top.build(buf->model_ridge.data(), nm, cell_mm, d);
   const float step = std::max(float(cfg.start_slide_step_of_d) * d, float(cfg.zbuffer_pixel_mm));
   const int n_across = int(lm.slide_across_mm / step), n_along = int(lm.slide_along_mm / (2 * step));
-  const Eigen::Vector2f across(-axis.y(), axis.x());
+  // Offsets are along (x) and across (y) the observed axis: in the axis frame, and turned into the bin.
+  const Eigen::Vector2f along = axis_to_bin.linear().col(0).head<2>().cast<float>().normalized();
+  const Eigen::Vector2f across(-along.y(), along.x());
   float best = 1e30f;
   Eigen::Vector2f best_offset = Eigen::Vector2f::Zero();
   for (int a = -n_along; a <= n_along; ++a)
     for (int b = -n_across; b <= n_across; ++b) {
-      const Eigen::Vector2f offset = float(2 * a) * step * axis + float(b) * step * across;
+      const float oa = float(2 * a) * step, ob = float(b) * step;
+      const Eigen::Vector2f offset = oa * along + ob * across;
       float m2o = 0, o2m = 0;
       for (int i = 0; i < nm; ++i) {
         const Eigen::Vector3f& p = buf->model_ridge[std::size_t(i)];
         m2o += buf->observed_top.at(p.x() + offset.x(), p.y() + offset.y());
       }
-      for (int j = 0; j < n_obs; ++j)
-        o2m += buf->model_top.at(obs[j].x() - offset.x(), obs[j].y() - offset.y());
+      for (int j = 0; j < n_obs; ++j) o2m += model_top.at(obs_axis[j].x() - oa, obs_axis[j].y() - ob);
       const float cost = 0.5f * (m2o / float(nm) + o2m / float(n_obs));
       // Ties go to the smaller move (the measured centres agree when the whole pipe is seen).
       if (cost < best - 1e-4f || (cost <= best + 1e-4f && offset.norm() < best_offset.norm()))

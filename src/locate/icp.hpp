@@ -30,7 +30,7 @@ struct IcpBuffers {
   std::vector<Eigen::Vector3f> model_ridge;  // P_m
   std::vector<Eigen::Vector3f> src, dst;     // correspondences
   RidgeBuffers ridge;
-  TopDistance observed_top, model_top;  // for slide_start
+  TopDistance observed_top;  // for slide_start
 };
 
 // max_region_points: the most points an observed region passes to the Z-ridge.
@@ -53,16 +53,38 @@ struct RidgeFit {
 // Rigid transform taking src onto dst in the least-squares sense (Kabsch), fixed-size maths.
 Pose fit_rigid(const Eigen::Vector3f* src, const Eigen::Vector3f* dst, int n);
 
-// Beyond the paper: an observed region is often only part of its pipe (an end hidden, one leg
-// of a U), so its measured centre need not be the model's. The start is slid in the bin plane,
-// along and across the observed axis over the model's own extent, to where its ridge best covers
-// the observed one (mean distance both ways, truncated at D); ICP then starts from there.
 struct SlidStart {
-  Pose pose = Pose::Identity();
-  float cost_mm = 1e30f;  // mean truncated ridge distance, both ways, at the best offset
+  Pose pose = Pose::Identity();  // model -> bin
+  float cost_mm = 1e30f;         // mean truncated top-view ridge distance, both ways, at the best offset
+  int start = -1;                // index in the StartSet
 };
-SlidStart slide_start(const LocatorModel& lm, const Pose& start, const Eigen::Vector3f* observed_ridge,
-                      int n_observed, const Eigen::Vector2f& axis, const LocateConfig& cfg, float cell_mm,
+
+// IV-B's initial states, prepared once per model. Start s lies in the frame of the observed axis
+// (X along the measured principal direction, the measured centre at the origin): turned about the
+// axis (canonical start k), reversed or not, and (beyond the paper) turned about the vertical by
+// a yaw offset, since the principal direction of a partly hidden curved pipe can be far from the
+// model's. Each keeps its coarse Z-ridge (model frame) and the top-view distance to it, so that a
+// candidate slides its starts without extracting a model ridge per start.
+struct StartSet {
+  float cell_mm = 0;                         // ridge cell of the ridges (the probes' cell)
+  std::vector<Pose> pose;                    // model -> axis frame
+  std::vector<int> ridge_begin;              // start s: ridge_model[ridge_begin[s] .. ridge_begin[s + 1])
+  std::vector<Eigen::Vector3f> ridge_model;  // ridge points, model frame
+  std::vector<TopDistance> top;              // distance to the ridge, axis frame
+  int size() const { return int(pose.size()); }
+  int ridge_count(int s) const { return ridge_begin[std::size_t(s) + 1] - ridge_begin[std::size_t(s)]; }
+  const Eigen::Vector3f* ridge(int s) const { return &ridge_model[std::size_t(ridge_begin[std::size_t(s)])]; }
+};
+StartSet prepare_starts(const LocatorModel& lm, const LocateConfig& cfg);
+
+// Beyond the paper: an observed region is often only part of its pipe (an end hidden, one leg
+// of a U), so its measured centre need not be the model's. Start s, placed by axis_to_bin, is slid
+// in the bin plane, along and across the observed axis over the model's own extent, to where its
+// ridge best covers the observed one (mean top-view distance both ways, truncated at D).
+// buf->observed_top must hold the observed ridge (TopDistance::build with cap D), and
+// observed_in_axis the observed ridge points in the axis frame.
+SlidStart slide_start(const LocatorModel& lm, const StartSet& starts, int s, const Pose& axis_to_bin,
+                      const Eigen::Vector3f* observed_in_axis, int n_observed, const LocateConfig& cfg,
                       IcpBuffers* buf);
 
 // One run of Algorithm 2's inner loop from `start`.

@@ -6,16 +6,14 @@
 namespace pipeloc {
 namespace {
 
-// IV-B: an initial state: the model turned about its axis (canonical start k), its measured
-// principal direction laid along the observed one in either direction, turned about the vertical
-// by yaw offset y, its measured centre on the observed centre.
-Pose initial_state(const LocatorModel& lm, const AxisEstimate& est, bool reverse, int k, int y) {
-  double yaw = std::atan2(est.axis.y(), est.axis.x()) + lm.yaw_offset_rad(y);
-  if (reverse) yaw += M_PI;
+// IV-B: the frame of the observed axis: X along the measured principal direction, the measured
+// centre at the origin. The initial states are placed by it.
+Pose axis_frame(const AxisEstimate& est) {
   Pose place = Pose::Identity();
-  place.linear() = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  place.linear() =
+      Eigen::AngleAxisd(std::atan2(est.axis.y(), est.axis.x()), Eigen::Vector3d::UnitZ()).toRotationMatrix();
   place.translation() = est.centre.cast<double>();
-  return place * lm.canonical_starts[std::size_t(k)];
+  return place;
 }
 
 }  // namespace
@@ -44,6 +42,7 @@ Locator::Locator(const PipeModel& model, const LocateConfig& cfg, const Intrinsi
       workers_(std::size_t(std::max(1, cfg.threads))),
       pool_(std::max(1, cfg.threads)) {
   lm_ = prepare_locator_model(model, float(cfg.refine_inlier_mm) + 4.0f, cfg);
+  starts_ = prepare_starts(lm_, cfg);
   reserve_zbuffer(&zb_, cfg.zbuffer_max_side_mm, cfg.zbuffer_pixel_mm);
   reserve_normals(&nm_, zb_, pool_.size());
   hole_scratch_.assign(zb_.z.pixels.size(), 0.0f);
@@ -60,7 +59,8 @@ Locator::Locator(const PipeModel& model, const LocateConfig& cfg, const Intrinsi
     reserve_icp(&wk.icp, lm_, ridge_capacity_, float(cfg.ridge_cell_mm), rb_.max_region_cells);
     wk.region_pts.assign(std::size_t(rb_.max_region_cells), Eigen::Vector3f::Zero());
     wk.coarse_ridge.assign(std::size_t(ridge_capacity_), Eigen::Vector3f::Zero());
-    wk.fits.reserve(lm_.canonical_starts.size() * std::size_t(2 * lm_.yaw_offsets));
+    wk.coarse_in_axis.assign(std::size_t(ridge_capacity_), Eigen::Vector3f::Zero());
+    wk.fits.reserve(std::size_t(starts_.size()));
     wk.starts.reserve(wk.fits.capacity());
     wk.scratch_depth.resize(camera.width, camera.height, 0.0f);
   }
@@ -215,30 +215,30 @@ void Locator::work_candidate(int c, Worker& wk, const Image<float>& depth, const
     return;
   }
 
-  // IV-B, Algorithm 2: ICP from 2 x initial_rotations states; keep the least residual.
+  // IV-B, Algorithm 2: ICP from the initial states; keep the least residual.
   wk.fits.clear();
-  // All 2 x turns states get a few iterations; the most promising continue to convergence.
-  const int turns = std::max(1, cfg_.initial_rotations);
   // The probes rank the starts on coarser ridges of the same region.
-  const float probe_cell = float(std::max(cfg_.icp_probe_cell_mm, cfg_.ridge_cell_mm));
+  const float probe_cell = starts_.cell_mm;
   const int n_coarse =
       extract_zridge(wk.region_pts.data(), count, trace.axis.axis, probe_cell, 0.3f * d, &wk.icp.ridge,
                      wk.coarse_ridge.data(), ridge_capacity_, cfg_.match_surface);
-  // Every start is slid to where it best covers the observed ridge.
-  wk.starts.clear();
+  // Every start is slid to where it best covers the observed ridge ...
+  const Pose axis_to_bin = axis_frame(trace.axis);
+  const Pose bin_to_axis = axis_to_bin.inverse();
+  for (int k = 0; k < n_coarse; ++k)
+    wk.coarse_in_axis[std::size_t(k)] =
+        (bin_to_axis * wk.coarse_ridge[std::size_t(k)].cast<double>()).cast<float>();
   wk.icp.observed_top.build(wk.coarse_ridge.data(), n_coarse, probe_cell, d);
-  for (int dir = 0; dir < 2; ++dir)
-    for (int r = 0; r < turns; ++r)
-      for (int y = 0; y < lm_.yaw_offsets; ++y)
-        wk.starts.push_back(slide_start(lm_, initial_state(lm_, trace.axis, dir == 1, r, y),
-                                        wk.coarse_ridge.data(), n_coarse, trace.axis.axis, cfg_, probe_cell,
-                                        &wk.icp));
-  // Only the starts whose slid ridge covers the observed one best are probed.
+  wk.starts.clear();
+  for (int s = 0; s < starts_.size(); ++s)
+    wk.starts.push_back(
+        slide_start(lm_, starts_, s, axis_to_bin, wk.coarse_in_axis.data(), n_coarse, cfg_, &wk.icp));
+  // ... and those whose ridge covers it best are probed; the most promising continue to convergence.
   std::sort(wk.starts.begin(), wk.starts.end(),
             [](const SlidStart& a, const SlidStart& b) { return a.cost_mm < b.cost_mm; });
   if (int(wk.starts.size()) > cfg_.icp_probed_states) wk.starts.resize(std::size_t(cfg_.icp_probed_states));
-  for (const SlidStart& s : wk.starts) {
-    wk.fits.push_back(ridge_icp(lm_, s.pose, wk.coarse_ridge.data(), n_coarse, trace.axis.axis, cfg_,
+  for (const SlidStart& st : wk.starts) {
+    wk.fits.push_back(ridge_icp(lm_, st.pose, wk.coarse_ridge.data(), n_coarse, trace.axis.axis, cfg_,
                                 cfg_.icp_probe_iterations, &wk.icp, -1, probe_cell));
     wk.fits.back().seen_through = seen_through(wk.fits.back(), wk);
   }

@@ -87,6 +87,7 @@ class Locator {
   const RegionBuffers& regions() const { return rb_; }
   const std::vector<Eigen::Vector3f>& ridge_points() const { return ridge_pts_; }
   const LocatorModel& locator_model() const { return lm_; }
+  const StartSet& starts() const { return starts_; }
   const LocateConfig& config() const { return cfg_; }
 
  private:
@@ -95,7 +96,8 @@ class Locator {
     AxisBuffers ab;
     IcpBuffers icp;
     std::vector<Eigen::Vector3f> region_pts;
-    std::vector<Eigen::Vector3f> coarse_ridge;  // the region's Z-ridge on the probes' cells
+    std::vector<Eigen::Vector3f> coarse_ridge;    // the region's Z-ridge on the probes' cells
+    std::vector<Eigen::Vector3f> coarse_in_axis;  // the same in the frame of the observed axis
     std::vector<RidgeFit> fits;
     std::vector<SlidStart> starts;
     Image<float> scratch_depth;
@@ -127,6 +129,7 @@ class Locator {
   const PipeModel& model_;
   LocateConfig cfg_;
   LocatorModel lm_;
+  StartSet starts_;
   ZBuffer zb_;
   NormalMap nm_;
   std::vector<float> hole_scratch_;
