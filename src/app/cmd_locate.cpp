@@ -104,9 +104,11 @@ void add_locate(CLI::App& app) {
                   << '\n';
       }
     }
-    spdlog::info("{} pipes found ({} candidate regions, {} cores) in {:.1f} ms; pick: {}",
-                 out.estimates.size(), out.regions.candidates, out.regions.cores_kept, out.times.total_ms,
-                 pick >= 0 ? "rank " + std::to_string(pick) : std::string("none"));
+    spdlog::info(
+        "{} pipes found ({} candidate regions, {} cores, {} of them in a larger one's region) in {:.1f} ms; "
+        "pick: {}",
+        out.estimates.size(), out.regions.candidates, out.regions.cores_kept, out.regions.claimed,
+        out.times.total_ms, pick >= 0 ? "rank " + std::to_string(pick) : std::string("none"));
     const StageTimes& st = out.times;
     spdlog::info(
         "stages ms: zbuffer {:.1f} normals {:.1f} regions {:.1f} axis {:.1f} ridge_icp {:.1f} refine {:.1f} "

@@ -18,6 +18,7 @@ void reserve_regions(RegionBuffers* rb, const ZBuffer& zb, const LocateConfig& c
   rb->core_label.resize(zb.z.width, zb.z.height, -1);
   rb->stamp.resize(zb.z.width, zb.z.height, 0);
   rb->reach.resize(zb.z.width, zb.z.height, 0);
+  rb->claim.resize(zb.z.width, zb.z.height, 0);
   rb->ridge_z.resize(zb.z.width, zb.z.height, 0.0f);
   rb->queue.assign(cells, 0);
   rb->core_cells.assign(cells, 0);
@@ -113,7 +114,16 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
 
   // 2. Grow each core while the normal of a neighbour is close to that of the boundary cell.
   int region_pool = 0;
+  const int claim = ++rb->claim_value;
   for (int c = 0; c < n_cores && int(rb->candidates.size()) < cfg.max_candidates; ++c) {
+    // A core lying mostly in the region of a larger one is another piece of that pipe's top.
+    int claimed = 0;
+    for (int k = cores[c].begin; k < cores[c].end; ++k)
+      claimed += rb->claim.pixels[rb->core_cells[k]] == claim;
+    if (2 * claimed > cores[c].end - cores[c].begin) {
+      ++stats.claimed;
+      continue;
+    }
     // Growth is first held to region_max_reach_of_d * D from the core: a pipe's visible surface
     // lies within about D/2 of its top strip, and a touching pipe then adds a band, not itself.
     // A region too short that way (a top strip broken into pieces) is grown again without the
@@ -189,6 +199,7 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
     r.core_area_mm2 = cores[c].area;
     r.extent_mm = extent;
     rb->candidates.push_back(r);
+    for (int k = 0; k < count; ++k) rb->claim.pixels[cells[k]] = claim;
     region_pool += rb->max_region_cells;
   }
   stats.candidates = int(rb->candidates.size());

@@ -22,6 +22,8 @@ struct RegionBuffers {
   Image<int> core_label;  // -1 none, else core index (this frame)
   Image<int> stamp;       // growth visit marks
   Image<int> reach;       // growth: steps from the core
+  Image<int> claim;       // the frame's mark on cells of regions already taken up
+  int claim_value = 0;
   int stamp_value = 0;
   Image<float> ridge_z;                     // growth: height of the core cell each grown cell came from
   std::vector<int> queue;                   // BFS
@@ -35,6 +37,7 @@ struct RegionStats {
   int core_regions = 0;  // connected upward regions before the area test
   int cores_kept = 0;    // after area and extent tests
   int candidates = 0;    // grown regions longer than a * L
+  int claimed = 0;       // cores lying mostly in an earlier candidate region: one pipe, not grown again
 };
 
 void reserve_regions(RegionBuffers* rb, const ZBuffer& zb, const LocateConfig& cfg, float tube_d_mm,
