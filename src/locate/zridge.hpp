@@ -10,7 +10,8 @@ namespace pipeloc {
 
 struct RidgeBuffers {
   int cols = 0, rows = 0;              // capacity of the axis-aligned grid
-  std::vector<float> top_z;            // per cell: highest z
+  std::vector<float> top_z;            // per cell: highest z; -inf (empty) between calls
+  std::vector<int> row_lo, row_hi;     // per row: first and last occupied column of this call
   std::vector<Eigen::Vector3f> top_p;  // per cell: that point
   std::vector<Eigen::Vector2f> uv;     // per input point: along and across the axis
 };
