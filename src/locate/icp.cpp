@@ -238,7 +238,12 @@ RefineResult refine_on_surface(const LocatorModel& lm, const Pose& start, const 
   const auto& sp = lm.model->surface.points;
   const auto& sn = lm.model->surface.normals;
   const float inlier = float(cfg.refine_inlier_mm);
+  // Coarse to fine: all but the last kFineIterations use every third point; the last (and the
+  // reported inliers and rms) all of them.
+  constexpr int kFineIterations = 3, kCoarseStride = 3;
+  const int fine_from = std::max(0, cfg.refine_iterations - kFineIterations);
   for (int it = 0; it < cfg.refine_iterations; ++it) {
+    const int stride = it < fine_from ? kCoarseStride : 1;
     const Eigen::Matrix3f r = res.pose.linear().cast<float>();
     const Eigen::Vector3f t = res.pose.translation().cast<float>();
     const Eigen::Matrix3f rt = r.transpose();
@@ -247,7 +252,7 @@ RefineResult refine_on_surface(const LocatorModel& lm, const Pose& start, const 
     Eigen::Matrix<double, 6, 1> b = Eigen::Matrix<double, 6, 1>::Zero();
     int inliers = 0;
     double sq = 0;
-    for (int i = 0; i < n; ++i) {
+    for (int i = 0; i < n; i += stride) {
       const Eigen::Vector3f q = rt * (obs[i] - t);  // observed point in the model frame
       const int s = lm.nearest_sample(q);
       if (s < 0) continue;
@@ -266,7 +271,7 @@ RefineResult refine_on_surface(const LocatorModel& lm, const Pose& start, const 
       ++inliers;
       sq += double(res_i) * res_i;
     }
-    res.inliers = inliers;
+    res.inliers = inliers * stride;  // about: only the fine iterations count them all
     res.rms_mm = inliers ? float(std::sqrt(sq / inliers)) : 0.f;
     if (inliers < 12) break;
     const Eigen::Matrix<double, 6, 1> x = a.ldlt().solve(b);
@@ -277,7 +282,10 @@ RefineResult refine_on_surface(const LocatorModel& lm, const Pose& start, const 
     const Eigen::Vector3d cd = c.cast<double>();
     delta.translation() = cd - delta.linear() * cd + x.tail<3>();
     res.pose = delta * res.pose;
-    if (x.tail<3>().norm() < 0.01 && angle < 1e-4) break;
+    if (x.tail<3>().norm() < 0.01 && angle < 1e-4) {
+      if (stride == 1) break;
+      it = fine_from - 1;  // converged on the subset: go on to the fine iterations
+    }
   }
   return res;
 }
