@@ -87,22 +87,24 @@ TEST(Stl, TruncatedAscii) {
   EXPECT_NE(error_of(dir.file("t.stl")).find("truncated"), std::string::npos) << error_of(dir.file("t.stl"));
 }
 
-TEST(Stl, AsciiWithBadVertex) {
+// The loader's message for an ASCII STL of one facet whose first vertex is `first_vertex`.
+std::string one_facet_error(const std::string& first_vertex) {
   TempDir dir;
-  test::write_text(dir.file("b.stl"),
-                   "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 zero\nvertex 1 0 0\nvertex 0 1 0\n"
-                   "endloop\nendfacet\nendsolid x\n");
-  EXPECT_NE(error_of(dir.file("b.stl")).find("vertex"), std::string::npos) << error_of(dir.file("b.stl"));
+  test::write_text(dir.file("f.stl"), "solid x\nfacet normal 0 0 1\nouter loop\nvertex " + first_vertex +
+                                          "\nvertex 1 0 0\nvertex 0 1 0\nendloop\nendfacet\nendsolid x\n");
+  return error_of(dir.file("f.stl"));
+}
+
+TEST(Stl, AsciiWithBadVertex) {
+  const std::string error = one_facet_error("0 0 zero");
+  EXPECT_NE(error.find("vertex"), std::string::npos) << error;
 }
 
 // Found by tools/fuzz: coordinates of 1e30 mm overflowed the surface area to inf, and the
 // model derivation then indexed out of its sample table.
 TEST(Stl, CoordinatesBeyondAKilometreAreRefused) {
-  TempDir dir;
-  test::write_text(dir.file("h.stl"),
-                   "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 1e30\nvertex 1 0 0\nvertex 0 1 0\n"
-                   "endloop\nendfacet\nendsolid x\n");
-  EXPECT_NE(error_of(dir.file("h.stl")).find("beyond 1e6 mm"), std::string::npos) << error_of(dir.file("h.stl"));
+  const std::string error = one_facet_error("0 0 1e30");
+  EXPECT_NE(error.find("beyond 1e6 mm"), std::string::npos) << error;
 }
 
 TEST(Stl, NotAnStl) {
