@@ -21,20 +21,16 @@ int nearest(const Eigen::Vector3f& q, const Eigen::Vector3f* pts, int n, float* 
 
 int model_ridge(const LocatorModel& lm, const Pose& pose, const Eigen::Vector2f& axis, float cell_mm,
                 const LocateConfig& cfg, IcpBuffers* buf) {
-  const Eigen::Matrix3f r = pose.linear().cast<float>();
-  const Eigen::Vector3f t = pose.translation().cast<float>();
-  const Eigen::Vector3f up_in_model = r.row(2).transpose();
-  // Samples facing down at this pose lie under the tube's top half and are never the highest of
-  // a ridge cell inside a run: they are left out (half the work of every iteration).
+  PosedPoints samples;
+  samples.points = lm.ridge_samples.data();
+  samples.normals = lm.ridge_normals.data();
+  samples.count = int(lm.ridge_samples.size());
   // Coarser cells need proportionally fewer samples: the same few per cell.
-  const std::size_t stride = std::size_t(std::max(1, int(cell_mm / float(cfg.ridge_cell_mm) + 0.5f)));
-  const std::size_t step = stride * stride;
-  int n = 0;
-  for (std::size_t i = 0; i < lm.ridge_samples.size(); i += step)
-    if (lm.ridge_normals[i].dot(up_in_model) > -0.2f)
-      buf->moved[std::size_t(n++)] = r * lm.ridge_samples[i] + t;
-  return extract_zridge(buf->moved.data(), n, axis, cell_mm, 0.3f * lm.tube_d_mm, &buf->ridge,
-                        buf->model_ridge.data(), int(buf->model_ridge.size()), cfg.match_surface);
+  const int stride = std::max(1, int(cell_mm / float(cfg.ridge_cell_mm) + 0.5f));
+  samples.stride = stride * stride;
+  samples.to_bin = pose;
+  return extract_zridge(samples, axis, cell_mm, 0.3f * lm.tube_d_mm, &buf->ridge, buf->model_ridge.data(),
+                        int(buf->model_ridge.size()), cfg.match_surface);
 }
 
 // Mean of min(distance, cap) from each of a to its nearest in b.
@@ -58,7 +54,6 @@ float truncated_mean(const Eigen::Vector3f* a, int na, const Eigen::Vector3f* b,
 
 void reserve_icp(IcpBuffers* buf, const LocatorModel& lm, int max_ridge_points, float ridge_cell_mm,
                  int max_region_points) {
-  buf->moved.assign(lm.ridge_samples.size(), Eigen::Vector3f::Zero());
   buf->model_ridge.assign(std::size_t(max_ridge_points), Eigen::Vector3f::Zero());
   buf->src.assign(std::size_t(2 * max_ridge_points), Eigen::Vector3f::Zero());
   buf->dst.assign(std::size_t(2 * max_ridge_points), Eigen::Vector3f::Zero());
@@ -184,7 +179,8 @@ Pose fit_rigid(const Eigen::Vector3f* src, const Eigen::Vector3f* dst, int n) {
 
 RidgeFit ridge_icp(const LocatorModel& lm, const Pose& start, const Eigen::Vector3f* obs, int n_obs,
                    const Eigen::Vector2f& axis, const LocateConfig& cfg, int max_iterations, IcpBuffers* buf,
-                   float gate_mm, float cell_mm) {
+                   float gate_mm, float cell_mm, const Eigen::Vector3f* start_ridge,
+                   int start_ridge_count) {
   if (cell_mm <= 0) cell_mm = float(cfg.ridge_cell_mm);
   RidgeFit fit;
   fit.pose = start;
@@ -193,7 +189,15 @@ RidgeFit ridge_icp(const LocatorModel& lm, const Pose& start, const Eigen::Vecto
   float gate = gate_mm > 0 ? gate_mm : std::max(lm.extent_l_mm / 3, d);
   for (int it = 0; it < max_iterations; ++it) {
     fit.iterations = it + 1;
-    const int nm = model_ridge(lm, fit.pose, axis, cell_mm, cfg, buf);  // 2.2.1
+    int nm = 0;  // 2.2.1
+    if (it == 0 && start_ridge) {
+      const Eigen::Matrix3f r = fit.pose.linear().cast<float>();
+      const Eigen::Vector3f t = fit.pose.translation().cast<float>();
+      nm = std::min(start_ridge_count, int(buf->model_ridge.size()));
+      for (int i = 0; i < nm; ++i) buf->model_ridge[std::size_t(i)] = r * start_ridge[i] + t;
+    } else {
+      nm = model_ridge(lm, fit.pose, axis, cell_mm, cfg, buf);
+    }
     int pairs = 0;
     for (int i = 0; i < nm; ++i) {  // 2.2.2
       float d2;

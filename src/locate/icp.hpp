@@ -26,7 +26,6 @@ struct TopDistance {
 };
 
 struct IcpBuffers {
-  std::vector<Eigen::Vector3f> moved;        // model ridge samples at the current pose
   std::vector<Eigen::Vector3f> model_ridge;  // P_m
   std::vector<Eigen::Vector3f> src, dst;     // correspondences
   RidgeBuffers ridge;
@@ -90,9 +89,12 @@ SlidStart slide_start(const LocatorModel& lm, const StartSet& starts, int s, con
 // One run of Algorithm 2's inner loop from `start`.
 // `gate_mm` < 0 starts the correspondence gate at L/3 (a cold start). `cell_mm` is the ridge
 // cell of the observed ridge given (<= 0: cfg.ridge_cell_mm); the model's ridge uses the same.
+// `start_ridge` (model frame), when given, is the model's ridge at `start` along `axis` in cells of
+// cell_mm, already known (a start of the StartSet): the first iteration does not extract it again.
 RidgeFit ridge_icp(const LocatorModel& lm, const Pose& start, const Eigen::Vector3f* observed_ridge,
                    int n_observed, const Eigen::Vector2f& axis, const LocateConfig& cfg, int max_iterations,
-                   IcpBuffers* buf, float gate_mm = -1, float cell_mm = -1);
+                   IcpBuffers* buf, float gate_mm = -1, float cell_mm = -1,
+                   const Eigen::Vector3f* start_ridge = nullptr, int start_ridge_count = 0);
 
 struct RefineResult {
   Pose pose = Pose::Identity();

@@ -40,7 +40,7 @@ struct LocateConfig {
   double start_slide_step_of_d =
       1.0;  // initial states slid in steps of this * D across the axis, twice along
   int icp_max_iterations = 24;
-  int icp_probed_states = 72;      // of the slid starts, the best this many (by ridge cover) are probed
+  int icp_probed_states = 48;      // of the slid starts, the best this many (by ridge cover) are probed
                                    // (72 = all of 2 x 6 turns x 6 yaws; fewer trade recall for time),
   int icp_probe_iterations = 3;    // each gets this many iterations ...
   double icp_probe_cell_mm = 4.0;  // ... on ridges of this cell size (coarse: a quarter of the work)

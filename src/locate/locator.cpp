@@ -239,7 +239,8 @@ void Locator::work_candidate(int c, Worker& wk, const Image<float>& depth, const
   if (int(wk.starts.size()) > cfg_.icp_probed_states) wk.starts.resize(std::size_t(cfg_.icp_probed_states));
   for (const SlidStart& st : wk.starts) {
     wk.fits.push_back(ridge_icp(lm_, st.pose, wk.coarse_ridge.data(), n_coarse, trace.axis.axis, cfg_,
-                                cfg_.icp_probe_iterations, &wk.icp, -1, probe_cell));
+                                cfg_.icp_probe_iterations, &wk.icp, -1, probe_cell, starts_.ridge(st.start),
+                                starts_.ridge_count(st.start)));
     wk.fits.back().seen_through = seen_through(wk.fits.back(), wk);
   }
   const auto by_rank = [d](const RidgeFit& x, const RidgeFit& y) { return x.rank_cost(d) < y.rank_cost(d); };

@@ -11,9 +11,10 @@ namespace pipeloc {
 struct RidgeBuffers {
   int cols = 0, rows = 0;              // capacity of the axis-aligned grid
   std::vector<float> top_z;            // per cell: highest z; -inf (empty) between calls
+  std::vector<int> top_i;              // per cell: the index of that point
   std::vector<int> row_lo, row_hi;     // per row: first and last occupied column of this call
-  std::vector<Eigen::Vector3f> top_p;  // per cell: that point
-  std::vector<Eigen::Vector2f> uv;     // per input point: along and across the axis
+  std::vector<Eigen::Vector3f> uvz;    // per point taken: along and across the axis, and height
+  std::vector<int> index;              // per point taken: its index in the input
 };
 
 void reserve_ridge(RidgeBuffers* rb, float max_extent_mm, float cell_mm, int max_points = 0);
@@ -25,5 +26,18 @@ void reserve_ridge(RidgeBuffers* rb, float max_extent_mm, float cell_mm, int max
 int extract_zridge(const Eigen::Vector3f* points, int count, const Eigen::Vector2f& axis, float cell_mm,
                    float min_run_mm, RidgeBuffers* rb, Eigen::Vector3f* out, int capacity,
                    bool whole_surface = false);
+
+// The same ridge of points given in another frame (the model's), placed in the bin by to_bin:
+// every `stride`-th point whose normal (same frame) does not face down at that pose is taken.
+// Only the ridge points are moved into the bin, not every point.
+struct PosedPoints {
+  const Eigen::Vector3f* points = nullptr;
+  const Eigen::Vector3f* normals = nullptr;  // null: every point taken
+  int count = 0;
+  int stride = 1;
+  Pose to_bin = Pose::Identity();
+};
+int extract_zridge(const PosedPoints& pts, const Eigen::Vector2f& axis, float cell_mm, float min_run_mm,
+                   RidgeBuffers* rb, Eigen::Vector3f* out, int capacity, bool whole_surface = false);
 
 }  // namespace pipeloc
