@@ -227,6 +227,41 @@ SimulatedScene pile_of(const PipeModel& model, int pipes, unsigned seed) {
   return simulate_scene(model, p, rng);
 }
 
+// The locator builds its Z-buffer and fills its holes in row bands on its threads; one band on
+// one thread must give the same buffer, cell for cell.
+TEST(ZBufferBuild, RowBandsOnThreadsGiveTheSameBufferAsOneBand) {
+  const PipeModel& model = preset_model("sbend");
+  const SimulatedScene s = pile_of(model, 12, 5);
+  LocateConfig cfg;
+  cfg.threads = 2;
+  Locator loc(model, cfg, s.camera.intrinsics);
+  loc.locate(s.depth_mm, s.camera);
+  ZBuffer one;
+  reserve_zbuffer(&one, cfg.zbuffer_max_side_mm, cfg.zbuffer_pixel_mm);
+  ZBufferPoints pts;
+  reserve_zbuffer_points(&pts, s.depth_mm.width * s.depth_mm.height, 1);
+  HoleList holes;
+  holes.reserve(one);
+  EXPECT_GT(build_zbuffer(s.depth_mm, s.camera.intrinsics, bin_to_camera(s.camera), &pts, &one), 0);
+  const int passes = int(std::lround(cfg.hole_fill_mm / 2 / cfg.zbuffer_pixel_mm));
+  ASSERT_GT(passes, 0);
+  fill_small_holes(&one, passes, float(cfg.continuity_step_max_mm), &holes);
+  const ZBuffer& banded = loc.zbuffer();
+  ASSERT_EQ(one.width, banded.width);
+  ASSERT_EQ(one.height, banded.height);
+  EXPECT_EQ(one.origin_x_mm, banded.origin_x_mm);
+  EXPECT_EQ(one.origin_y_mm, banded.origin_y_mm);
+  int valid = 0, differ = 0;
+  for (int j = 0; j < one.height; ++j)
+    for (int i = 0; i < one.width; ++i) {
+      const float a = one.z.at(i, j), b = banded.z.at(i, j);
+      valid += !std::isnan(a);
+      differ += std::isnan(a) != std::isnan(b) || (!std::isnan(a) && a != b);
+    }
+  EXPECT_GT(valid, one.width * one.height / 2);
+  EXPECT_EQ(differ, 0);
+}
+
 // For each pipe of the scene, how many of the given Z-buffer cells lie within tol_mm of its surface.
 std::vector<int> pipe_votes(const Locator& loc, const PipeModel& model, const SimulatedScene& s,
                             const int* cells, int n, float tol_mm) {

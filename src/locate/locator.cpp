@@ -44,8 +44,11 @@ Locator::Locator(const PipeModel& model, const LocateConfig& cfg, const Intrinsi
   lm_ = prepare_locator_model(model, float(cfg.refine_inlier_mm) + 4.0f, cfg);
   starts_ = prepare_starts(lm_, cfg);
   reserve_zbuffer(&zb_, cfg.zbuffer_max_side_mm, cfg.zbuffer_pixel_mm);
+  camera_width_ = camera.width, camera_height_ = camera.height;
+  reserve_zbuffer_points(&zb_points_, camera.width * camera.height, pool_.size());
   reserve_normals(&nm_, zb_, pool_.size());
-  hole_scratch_.assign(zb_.z.pixels.size(), 0.0f);
+  holes_.reserve(zb_);
+  band_holes_.assign(std::size_t(pool_.size()), 0);
   reserve_regions(&rb_, zb_, cfg, lm_.tube_d_mm, lm_.extent_l_mm);
 
   // A ridge point per ridge cell along the pipe, for a pipe folded onto itself twice.
@@ -63,6 +66,7 @@ Locator::Locator(const PipeModel& model, const LocateConfig& cfg, const Intrinsi
     wk.fits.reserve(std::size_t(starts_.size()));
     wk.starts.reserve(wk.fits.capacity());
     wk.scratch_depth.resize(camera.width, camera.height, 0.0f);
+    wk.scratch_mesh.reserve(lm_.verify_mesh);
   }
   ridge_pts_.assign(std::size_t(ridge_capacity_) * cfg.max_candidates, Eigen::Vector3f::Zero());
   slot_.resize(std::size_t(cfg.max_candidates));
@@ -89,9 +93,7 @@ const LocateOutput& Locator::locate(const Image<float>& depth, const CameraInfo&
   }
 
   auto t = Clock::now();
-  out_.valid_pixels = build_zbuffer(depth, camera.intrinsics, bin_to_cam, &zb_);
-  fill_small_holes(&zb_, int(std::lround(cfg_.hole_fill_mm / 2 / zb_.pixel_mm)),
-                   float(cfg_.continuity_step_max_mm), &hole_scratch_);
+  build_zbuffer_banded(depth, camera, bin_to_cam);
   out_.times.zbuffer_ms = ms_since(t);
 
   t = Clock::now();
@@ -155,6 +157,66 @@ const LocateOutput& Locator::locate(const Image<float>& depth, const CameraInfo&
   if (int(out_.estimates.size()) > cfg_.max_results) out_.estimates.resize(std::size_t(cfg_.max_results));
   out_.times.total_ms = ms_since(t_start);
   return out_;
+}
+
+// II-A on the pool: each step of the Z-buffer and of the hole filling in row bands, one per thread.
+void Locator::build_zbuffer_banded(const Image<float>& depth, const CameraInfo& camera, const Pose& bin_to_cam) {
+  out_.valid_pixels = 0;
+  zb_.width = zb_.height = 0;
+  // The buffers were sized for the camera given at construction; callers check frame sizes first.
+  if (depth.width != camera_width_ || depth.height != camera_height_) return;
+  struct Bands {
+    Locator* self;
+    const Image<float>* depth;
+    const Intrinsics* k;
+    const Pose* bin_to_cam;
+    int bands;
+    float max_spread_mm;
+    std::atomic<int> filled{0};
+    int lo(int band, int rows) const { return rows * band / bands; }
+    int hi(int band, int rows) const { return rows * (band + 1) / bands; }
+    static void points(void* ctx, int band, int) {
+      Bands& b = *static_cast<Bands*>(ctx);
+      zbuffer_points_rows(*b.depth, *b.k, *b.bin_to_cam, b.self->zb_.pixel_mm, b.lo(band, b.depth->height),
+                          b.hi(band, b.depth->height), band, &b.self->zb_points_);
+    }
+    static void splat(void* ctx, int band, int) {
+      Bands& b = *static_cast<Bands*>(ctx);
+      ZBuffer& zb = b.self->zb_;
+      splat_zbuffer_rows(b.self->zb_points_, b.lo(band, zb.height), b.hi(band, zb.height), &zb);
+    }
+    static void collect(void* ctx, int band, int) {
+      Bands& b = *static_cast<Bands*>(ctx);
+      const ZBuffer& zb = b.self->zb_;
+      b.self->band_holes_[std::size_t(band)] =
+          collect_holes_rows(zb, b.lo(band, zb.height), b.hi(band, zb.height), &b.self->holes_);
+    }
+    static void fill(void* ctx, int band, int) {
+      Bands& b = *static_cast<Bands*>(ctx);
+      const ZBuffer& zb = b.self->zb_;
+      b.filled += fill_holes_pass(zb, b.max_spread_mm, b.lo(band, zb.height), b.self->band_holes_[std::size_t(band)],
+                                  &b.self->holes_);
+    }
+    static void apply(void* ctx, int band, int) {
+      Bands& b = *static_cast<Bands*>(ctx);
+      ZBuffer& zb = b.self->zb_;
+      int& count = b.self->band_holes_[std::size_t(band)];
+      count = apply_filled(b.lo(band, zb.height), count, &b.self->holes_, &zb);
+    }
+  } bands{this, &depth, &camera.intrinsics, &bin_to_cam, pool_.size(), float(cfg_.continuity_step_max_mm)};
+  pool_.run(bands.bands, &Bands::points, &bands);
+  out_.valid_pixels = place_zbuffer(zb_points_, bands.bands, &zb_);
+  if (out_.valid_pixels == 0) return;
+  pool_.run(bands.bands, &Bands::splat, &bands);
+  // Holes of up to hole_fill_mm are filled from both sides: half of it in passes of one cell.
+  const int passes = int(std::lround(cfg_.hole_fill_mm / 2 / zb_.pixel_mm));
+  if (passes > 0) pool_.run(bands.bands, &Bands::collect, &bands);
+  for (int pass = 0; pass < passes; ++pass) {
+    bands.filled = 0;
+    pool_.run(bands.bands, &Bands::fill, &bands);
+    if (bands.filled == 0) break;
+    pool_.run(bands.bands, &Bands::apply, &bands);
+  }
 }
 
 void Locator::candidate_task(void* frame, int c, int worker) {
@@ -318,7 +380,7 @@ void Locator::work_candidate(int c, Worker& wk, const Image<float>& depth, const
     e.model_to_bin = refined.pose;
     e.model_to_cam = bin_to_cam * refined.pose;
     e.check = verify_pose(lm_.verify_mesh, e.model_to_cam, depth, camera.intrinsics,
-                          float(cfg_.verify_tolerance_mm), &wk.scratch_depth);
+                          float(cfg_.verify_tolerance_mm), &wk.scratch_depth, &wk.scratch_mesh);
     wk.times.verify_ms += ms_since(t);
     e.ridge_cost_mm = wk.fits[i].cost_mm;
     e.ridge_points = trace.ridge_count;

@@ -101,6 +101,7 @@ class Locator {
     std::vector<RidgeFit> fits;
     std::vector<SlidStart> starts;
     Image<float> scratch_depth;
+    ProjectedMesh scratch_mesh;
     StageTimes times;
     int candidates_done = 0;  // this cycle, for the running average of a candidate's time
     double candidate_ms_sum = 0;
@@ -117,6 +118,7 @@ class Locator {
   void work_candidate(int c, Worker& wk, const Image<float>& depth, const CameraInfo& camera,
                       const Pose& bin_to_cam, Clock::time_point deadline);
   void merge_estimate(int c);
+  void build_zbuffer_banded(const Image<float>& depth, const CameraInfo& camera, const Pose& bin_to_cam);
   // RidgeFit::seen_through of a fit ridge_icp has just returned (its model ridge is still in wk.icp).
   float seen_through(const RidgeFit& f, const Worker& wk) const {
     return seen_through_share(zb_, wk.icp.model_ridge.data(), f.model_ridge_points,
@@ -131,8 +133,11 @@ class Locator {
   LocatorModel lm_;
   StartSet starts_;
   ZBuffer zb_;
+  ZBufferPoints zb_points_;
+  int camera_width_ = 0, camera_height_ = 0;
   NormalMap nm_;
-  std::vector<float> hole_scratch_;
+  HoleList holes_;
+  std::vector<int> band_holes_;  // per row band: its holes still listed
   RegionBuffers rb_;
   std::vector<Worker> workers_;
   WorkerPool pool_;

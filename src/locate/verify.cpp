@@ -1,13 +1,11 @@
 #include "locate/verify.hpp"
 
-#include "render/raster.hpp"
-
 namespace pipeloc {
 
 Verification verify_pose(const Mesh& mesh, const Pose& model_to_cam, const Image<float>& depth,
-                         const Intrinsics& k, float tol, Image<float>* scratch) {
+                         const Intrinsics& k, float tol, Image<float>* scratch, ProjectedMesh* projected) {
   Verification v;
-  const PixelBox box = render_depth_in_box(mesh, model_to_cam, k, scratch);
+  const PixelBox box = render_depth_in_box(mesh, model_to_cam, k, scratch, projected);
   for (int y = box.y0; y <= box.y1; ++y)
     for (int x = box.x0; x <= box.x1; ++x) {
       const float zm = scratch->at(x, y);

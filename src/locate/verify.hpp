@@ -6,6 +6,7 @@
 #include "core/image.hpp"
 #include "locate/locate_config.hpp"
 #include "model/mesh.hpp"
+#include "render/raster.hpp"
 
 namespace pipeloc {
 
@@ -19,8 +20,10 @@ struct Verification {
   float occluded() const { return model_px ? float(occluded_px) / float(model_px) : 1.f; }
 };
 
-// scratch: camera-sized image whose contents are overwritten in the model's box.
+// scratch: camera-sized image whose contents are overwritten in the model's box; projected:
+// reserved for the mesh.
 Verification verify_pose(const Mesh& mesh, const Pose& model_to_cam, const Image<float>& depth_mm,
-                         const Intrinsics& k, float tolerance_mm, Image<float>* scratch);
+                         const Intrinsics& k, float tolerance_mm, Image<float>* scratch,
+                         ProjectedMesh* projected);
 
 }  // namespace pipeloc

@@ -1,6 +1,7 @@
 #include "locate/zbuffer.hpp"
 
 #include <algorithm>
+#include <limits>
 
 namespace pipeloc {
 
@@ -29,84 +30,145 @@ void reserve_zbuffer(ZBuffer* zb, double max_side_mm, double pixel_mm) {
   zb->width = zb->height = 0;
 }
 
-int build_zbuffer(const Image<float>& depth, const Intrinsics& k, const Pose& bin_to_cam, ZBuffer* zb) {
+void reserve_zbuffer_points(ZBufferPoints* pts, int pixels, int bands) {
+  pts->p.assign(std::size_t(pixels), Eigen::Vector4f::Zero());
+  pts->band.assign(std::size_t(std::max(1, bands)), {});
+}
+
+void zbuffer_points_rows(const Image<float>& depth, const Intrinsics& k, const Pose& bin_to_cam, double pixel_mm,
+                         int v0, int v1, int band, ZBufferPoints* pts) {
   const Eigen::Matrix3f r = bin_to_cam.linear().transpose().cast<float>();  // camera -> bin
   const Eigen::Vector3f t = (-bin_to_cam.linear().transpose() * bin_to_cam.translation()).cast<float>();
-  const auto to_bin = [&](int u, int v, float d) -> Eigen::Vector3f {
-    return r * Eigen::Vector3f((u - float(k.cx)) * d / float(k.fx), (v - float(k.cy)) * d / float(k.fy), d) +
-           t;
-  };
-  // Pass 1: extent of the valid points.
-  float lo_x = 1e30f, lo_y = 1e30f, hi_x = -1e30f, hi_y = -1e30f;
-  int valid = 0;
-  for (int v = 0; v < depth.height; ++v)
+  const float fx = float(k.fx), fy = float(k.fy), cx = float(k.cx), cy = float(k.cy);
+  const float inv = float(1.0 / pixel_mm);
+  ZBufferPoints::Extent e;
+  for (int v = v0; v < v1; ++v)
     for (int u = 0; u < depth.width; ++u) {
+      Eigen::Vector4f& out = pts->p[std::size_t(v) * depth.width + u];
       const float d = depth.at(u, v);
-      if (!(d > 0)) continue;
-      const Eigen::Vector3f p = to_bin(u, v, d);
-      lo_x = std::min(lo_x, p.x()), hi_x = std::max(hi_x, p.x());
-      lo_y = std::min(lo_y, p.y()), hi_y = std::max(hi_y, p.y());
-      ++valid;
+      if (!(d > 0)) {
+        out.w() = -1;
+        continue;
+      }
+      const Eigen::Vector3f p = r * Eigen::Vector3f((float(u) - cx) * d / fx, (float(v) - cy) * d / fy, d) + t;
+      out = Eigen::Vector4f(p.x(), p.y(), p.z(), 0.5f * d / fx * inv);
+      e.lo_x = std::min(e.lo_x, p.x()), e.hi_x = std::max(e.hi_x, p.x());
+      e.lo_y = std::min(e.lo_y, p.y()), e.hi_y = std::max(e.hi_y, p.y());
+      ++e.valid;
     }
-  const double cap = (zb->z.width - 1) * zb->pixel_mm;
-  if (valid == 0) {
+  pts->band[std::size_t(band)] = e;
+}
+
+int place_zbuffer(const ZBufferPoints& pts, int bands, ZBuffer* zb) {
+  ZBufferPoints::Extent all;
+  for (int b = 0; b < bands; ++b) {
+    const ZBufferPoints::Extent& e = pts.band[std::size_t(b)];
+    all.lo_x = std::min(all.lo_x, e.lo_x), all.hi_x = std::max(all.hi_x, e.hi_x);
+    all.lo_y = std::min(all.lo_y, e.lo_y), all.hi_y = std::max(all.hi_y, e.hi_y);
+    all.valid += e.valid;
+  }
+  if (all.valid == 0) {
     zb->width = zb->height = 0;
     return 0;
   }
   // Keep the middle of the scene when it is larger than the buffer.
-  const double cx = 0.5 * (lo_x + hi_x), cy = 0.5 * (lo_y + hi_y);
-  const double side_x = std::min<double>(hi_x - lo_x, cap), side_y = std::min<double>(hi_y - lo_y, cap);
+  const double cap = (zb->z.width - 1) * zb->pixel_mm;
+  const double cx = 0.5 * (all.lo_x + all.hi_x), cy = 0.5 * (all.lo_y + all.hi_y);
+  const double side_x = std::min<double>(all.hi_x - all.lo_x, cap), side_y = std::min<double>(all.hi_y - all.lo_y, cap);
   zb->origin_x_mm = cx - side_x / 2;
   zb->origin_y_mm = cy - side_y / 2;
   zb->width = int(side_x / zb->pixel_mm) + 1;
   zb->height = int(side_y / zb->pixel_mm) + 1;
-  for (int j = 0; j < zb->height; ++j) std::fill_n(&zb->z.at(0, j), zb->width, ZBuffer::kEmpty);
+  return all.valid;
+}
 
-  // Pass 2: splat each point over its footprint, keeping the highest.
+void splat_zbuffer_rows(const ZBufferPoints& pts, int j0, int j1, ZBuffer* zb) {
+  j1 = std::min(j1, zb->height);
+  // Empty cells are -inf while splatting (a plain max), NaN again after.
+  constexpr float kLowest = -std::numeric_limits<float>::infinity();
+  for (int j = j0; j < j1; ++j) std::fill_n(&zb->z.at(0, j), zb->width, kLowest);
   const float inv = float(1.0 / zb->pixel_mm);
-  for (int v = 0; v < depth.height; ++v)
-    for (int u = 0; u < depth.width; ++u) {
-      const float d = depth.at(u, v);
-      if (!(d > 0)) continue;
-      const Eigen::Vector3f p = to_bin(u, v, d);
-      const float half = 0.5f * d / float(k.fx) * inv;  // footprint half-width in cells
-      const float ci = (p.x() - float(zb->origin_x_mm)) * inv, cj = (p.y() - float(zb->origin_y_mm)) * inv;
-      const int i0 = std::max(0, int(round_nearest(ci - half))),
-                i1 = std::min(zb->width - 1, int(round_nearest(ci + half)));
-      const int j0 = std::max(0, int(round_nearest(cj - half))),
-                j1 = std::min(zb->height - 1, int(round_nearest(cj + half)));
-      for (int j = j0; j <= j1; ++j)
-        for (int i = i0; i <= i1; ++i) {
-          float& cell = zb->z.at(i, j);
-          if (std::isnan(cell) || p.z() > cell) cell = p.z();
-        }
+  const float ox = float(zb->origin_x_mm), oy = float(zb->origin_y_mm);
+  for (const Eigen::Vector4f& p : pts.p) {
+    const float half = p.w();
+    if (half < 0) continue;
+    const float cj = (p.y() - oy) * inv;
+    const int jlo = std::max(j0, int(round_nearest(cj - half))), jhi = std::min(j1 - 1, int(round_nearest(cj + half)));
+    if (jlo > jhi) continue;
+    const float ci = (p.x() - ox) * inv;
+    const int i0 = std::max(0, int(round_nearest(ci - half))),
+              i1 = std::min(zb->width - 1, int(round_nearest(ci + half)));
+    for (int j = jlo; j <= jhi; ++j) {
+      float* row = &zb->z.at(0, j);
+      for (int i = i0; i <= i1; ++i) row[i] = std::max(row[i], p.z());
     }
+  }
+  for (int j = j0; j < j1; ++j) {
+    float* row = &zb->z.at(0, j);
+    for (int i = 0; i < zb->width; ++i)
+      if (row[i] == kLowest) row[i] = ZBuffer::kEmpty;
+  }
+}
+
+int build_zbuffer(const Image<float>& depth, const Intrinsics& k, const Pose& bin_to_cam, ZBufferPoints* pts,
+                  ZBuffer* zb) {
+  zbuffer_points_rows(depth, k, bin_to_cam, zb->pixel_mm, 0, depth.height, 0, pts);
+  const int valid = place_zbuffer(*pts, 1, zb);
+  splat_zbuffer_rows(*pts, 0, zb->height, zb);
   return valid;
 }
 
-void fill_small_holes(ZBuffer* zb, int passes, float max_spread_mm, std::vector<float>* scratch) {
+int collect_holes_rows(const ZBuffer& zb, int j0, int j1, HoleList* holes) {
+  int n = 0;
+  int* out = &holes->cell[std::size_t(zb.index(0, j0))];  // a band's holes lie in its own rows' slots
+  for (int j = std::max(1, j0); j < std::min(j1, zb.height - 1); ++j)
+    for (int i = 1; i + 1 < zb.width; ++i)
+      if (std::isnan(zb.z.at(i, j))) out[n++] = zb.index(i, j);
+  return n;
+}
+
+int fill_holes_pass(const ZBuffer& zb, float max_spread_mm, int j0, int count, HoleList* holes) {
   // Specular glints and dropouts punch holes in a pipe's top; a hole is filled from its valid
   // neighbours only where they agree (no filling across the step between a pipe and the floor).
-  for (int pass = 0; pass < passes; ++pass) {
-    int filled = 0;
-    for (int j = 1; j + 1 < zb->height; ++j)
-      for (int i = 1; i + 1 < zb->width; ++i) {
-        float& out = (*scratch)[std::size_t(zb->index(i, j))];
-        out = zb->z.at(i, j);
-        if (!std::isnan(out)) continue;
-        float lo = 1e30f, hi = -1e30f, sum = 0;
-        int n = 0;
-        for (int dj = -1; dj <= 1; ++dj)
-          for (int di = -1; di <= 1; ++di) {
-            const float z = zb->z.at(i + di, j + dj);
-            if (std::isnan(z)) continue;
-            lo = std::min(lo, z), hi = std::max(hi, z), sum += z, ++n;
-          }
-        if (n >= 3 && hi - lo <= max_spread_mm) out = sum / float(n), ++filled;
+  const int* cells = &holes->cell[std::size_t(zb.index(0, j0))];
+  float* value = &holes->value[std::size_t(zb.index(0, j0))];
+  const int w = zb.z.width;
+  int filled = 0;
+  for (int k = 0; k < count; ++k) {
+    const float* centre = &zb.z.pixels[std::size_t(cells[k])];
+    float lo = 1e30f, hi = -1e30f, sum = 0;
+    int n = 0;
+    for (int dj = -1; dj <= 1; ++dj)
+      for (int di = -1; di <= 1; ++di) {
+        const float z = centre[dj * w + di];
+        if (std::isnan(z)) continue;
+        lo = std::min(lo, z), hi = std::max(hi, z), sum += z, ++n;
       }
-    if (filled == 0) break;
-    for (int j = 1; j + 1 < zb->height; ++j)
-      std::copy_n(&(*scratch)[std::size_t(zb->index(1, j))], zb->width - 2, &zb->z.at(1, j));
+    const bool fill = n >= 3 && hi - lo <= max_spread_mm;
+    value[k] = fill ? sum / float(n) : ZBuffer::kEmpty;
+    filled += fill;
+  }
+  return filled;
+}
+
+int apply_filled(int j0, int count, HoleList* holes, ZBuffer* zb) {
+  int* cells = &holes->cell[std::size_t(zb->index(0, j0))];
+  const float* value = &holes->value[std::size_t(zb->index(0, j0))];
+  int left = 0;
+  for (int k = 0; k < count; ++k) {
+    if (std::isnan(value[k]))
+      cells[left++] = cells[k];
+    else
+      zb->z.pixels[std::size_t(cells[k])] = value[k];
+  }
+  return left;
+}
+
+void fill_small_holes(ZBuffer* zb, int passes, float max_spread_mm, HoleList* holes) {
+  int count = collect_holes_rows(*zb, 0, zb->height, holes);
+  for (int pass = 0; pass < passes && count > 0; ++pass) {
+    if (fill_holes_pass(*zb, max_spread_mm, 0, count, holes) == 0) break;
+    count = apply_filled(0, count, holes, zb);
   }
 }
 

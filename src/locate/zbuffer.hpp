@@ -37,16 +37,57 @@ Pose bin_to_camera(const CameraInfo& camera);
 // Allocates the buffer once for the largest configured area.
 void reserve_zbuffer(ZBuffer* zb, double max_side_mm, double pixel_mm);
 
-// Fills zb from a depth image. Each point covers its pixel's footprint, so cells finer than the
-// sensor's pixels are not left with holes. Returns the number of valid depth pixels.
-int build_zbuffer(const Image<float>& depth_mm, const Intrinsics& k, const Pose& bin_to_cam, ZBuffer* zb);
+// The depth pixels in the bin frame, between the two steps of filling a Z-buffer; both steps
+// work in bands (of image rows, then of buffer rows) that can run on different threads.
+struct ZBufferPoints {
+  struct Extent {
+    float lo_x = 1e30f, lo_y = 1e30f, hi_x = -1e30f, hi_y = -1e30f;
+    int valid = 0;
+  };
+  std::vector<Eigen::Vector4f> p;  // per depth pixel: x, y, z (bin), footprint half-width in cells (< 0: none)
+  std::vector<Extent> band;        // per image-row band: extent of its valid points
+};
+void reserve_zbuffer_points(ZBufferPoints* pts, int pixels, int bands);
+
+// Step 1, image rows [v0, v1) as band `band`: each valid pixel in the bin frame, with the
+// half-width of its footprint in buffer cells (so cells finer than the sensor's pixels are not
+// left with holes).
+void zbuffer_points_rows(const Image<float>& depth_mm, const Intrinsics& k, const Pose& bin_to_cam,
+                         double pixel_mm, int v0, int v1, int band, ZBufferPoints* pts);
+// Between the steps: places the buffer over the bands' extent (its middle, when larger than the
+// buffer). Returns the number of valid depth pixels.
+int place_zbuffer(const ZBufferPoints& pts, int bands, ZBuffer* zb);
+// Step 2, buffer rows [j0, j1): cleared, then every point's footprint over them, keeping the highest.
+void splat_zbuffer_rows(const ZBufferPoints& pts, int j0, int j1, ZBuffer* zb);
+
+// The three in one band: fills zb from a depth image. Returns the number of valid depth pixels.
+int build_zbuffer(const Image<float>& depth_mm, const Intrinsics& k, const Pose& bin_to_cam, ZBufferPoints* pts,
+                  ZBuffer* zb);
 
 // Share of pts (bin frame) whose cell holds an observed height more than tol_mm below them: the
 // sensor saw through where they would be. Cells with no reading or a higher one say nothing.
 float seen_through_share(const ZBuffer& zb, const Eigen::Vector3f* pts, int n, float tol_mm);
 
+// The empty cells still to fill, and the values a pass found for them: one slot per buffer cell
+// (a band of rows keeps its holes in its own rows' slots).
+struct HoleList {
+  std::vector<int> cell;
+  std::vector<float> value;
+  void reserve(const ZBuffer& zb) {
+    cell.assign(zb.z.pixels.size(), 0);
+    value.assign(zb.z.pixels.size(), 0.0f);
+  }
+};
+
 // Fills holes a few cells wide whose neighbours agree within max_spread_mm (glints on a ridge),
-// `passes` cells deep. scratch: one float per buffer cell.
-void fill_small_holes(ZBuffer* zb, int passes, float max_spread_mm, std::vector<float>* scratch);
+// `passes` cells deep.
+void fill_small_holes(ZBuffer* zb, int passes, float max_spread_mm, HoleList* holes);
+// The same in steps over row bands [j0, j1) (the buffer's border rows and columns are never
+// filled): the band's empty cells are listed once (returns their count); per pass, the values of
+// those that can be filled are found (returns how many), and once every band has done that,
+// written, the rest kept listed (returns how many are left).
+int collect_holes_rows(const ZBuffer& zb, int j0, int j1, HoleList* holes);
+int fill_holes_pass(const ZBuffer& zb, float max_spread_mm, int j0, int count, HoleList* holes);
+int apply_filled(int j0, int count, HoleList* holes, ZBuffer* zb);
 
 }  // namespace pipeloc

@@ -37,26 +37,36 @@ void DepthTarget::reset(int width, int height) {
 
 namespace {
 
-// Scan-converts the mesh seen through the pinhole; on_pixel(x, y, z, normal) for each covered
-// pixel centre, with the exact depth of the triangle's plane along that pixel's ray.
-template <typename OnPixel>
-void draw_perspective(const Mesh& mesh, const Pose& model_to_cam, const Intrinsics& k, int x0, int y0, int x1,
-                      int y1, OnPixel on_pixel) {
+// Moves and projects every vertex; false if one lies behind or at the lens.
+bool project_vertices(const Mesh& mesh, const Pose& model_to_cam, const Intrinsics& k, ProjectedMesh* out) {
   const Eigen::Matrix3d r = model_to_cam.linear();
   const Eigen::Vector3d t = model_to_cam.translation();
+  bool in_front = true;
+  for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
+    const Eigen::Vector3d p = r * mesh.vertices[i].cast<double>() + t;
+    out->cam[i] = p;
+    in_front = in_front && p.z() > 1;
+    out->px[i] = p.z() > 1 ? k.project(p) : Eigen::Vector2d::Zero();
+  }
+  return in_front;
+}
+
+// Scan-converts the projected mesh; on_pixel(x, y, z, normal) for each covered pixel centre in
+// the box, with the exact depth of the triangle's plane along that pixel's ray.
+template <typename OnPixel>
+void draw_perspective(const Mesh& mesh, const ProjectedMesh& pm, const Intrinsics& k, int x0, int y0, int x1,
+                      int y1, OnPixel on_pixel) {
+  const Eigen::Vector2d corner(x0, y0);
   for (const auto& f : mesh.faces) {
-    const Eigen::Vector3d p0 = r * mesh.vertices[f[0]].cast<double>() + t;
-    const Eigen::Vector3d p1 = r * mesh.vertices[f[1]].cast<double>() + t;
-    const Eigen::Vector3d p2 = r * mesh.vertices[f[2]].cast<double>() + t;
+    const Eigen::Vector3d &p0 = pm.cam[f[0]], &p1 = pm.cam[f[1]], &p2 = pm.cam[f[2]];
     if (p0.z() <= 1 || p1.z() <= 1 || p2.z() <= 1) continue;  // behind or at the lens
     Eigen::Vector3d n = (p1 - p0).cross(p2 - p0);
     if (n.norm() < 1e-12) continue;
     n.normalize();
     if (n.dot(p0) > 0) n = -n;  // face the camera: depth images see either side
     const double plane = n.dot(p0);
-    const Eigen::Vector2d s0 = k.project(p0), s1 = k.project(p1), s2 = k.project(p2);
-    scan_triangle(s0 - Eigen::Vector2d(x0, y0), s1 - Eigen::Vector2d(x0, y0), s2 - Eigen::Vector2d(x0, y0),
-                  x1 - x0 + 1, y1 - y0 + 1, [&](int xr, int yr) {
+    scan_triangle(pm.px[f[0]] - corner, pm.px[f[1]] - corner, pm.px[f[2]] - corner, x1 - x0 + 1, y1 - y0 + 1,
+                  [&](int xr, int yr) {
                     const int x = xr + x0, y = yr + y0;
                     const Eigen::Vector3d ray((x - k.cx) / k.fx, (y - k.cy) / k.fy, 1.0);
                     const double denom = n.dot(ray);
@@ -71,7 +81,10 @@ void draw_perspective(const Mesh& mesh, const Pose& model_to_cam, const Intrinsi
 
 void render_perspective(const Mesh& mesh, const Pose& model_to_cam, const Intrinsics& k, int label,
                         DepthTarget* target) {
-  draw_perspective(mesh, model_to_cam, k, 0, 0, target->z_mm.width - 1, target->z_mm.height - 1,
+  ProjectedMesh pm;
+  pm.reserve(mesh);
+  project_vertices(mesh, model_to_cam, k, &pm);
+  draw_perspective(mesh, pm, k, 0, 0, target->z_mm.width - 1, target->z_mm.height - 1,
                    [&](int x, int y, float z, const Eigen::Vector3d& n) {
                      float& cur = target->z_mm.at(x, y);
                      if (cur == 0 || z < cur) {
@@ -83,13 +96,13 @@ void render_perspective(const Mesh& mesh, const Pose& model_to_cam, const Intrin
 }
 
 PixelBox render_depth_in_box(const Mesh& mesh, const Pose& model_to_cam, const Intrinsics& k,
-                             Image<float>* z_mm) {
+                             Image<float>* z_mm, ProjectedMesh* pm) {
   PixelBox box;
+  if (mesh.vertices.empty() || pm->cam.size() < mesh.vertices.size()) return box;
+  if (!project_vertices(mesh, model_to_cam, k, pm)) return box;
   double lo_x = 1e30, lo_y = 1e30, hi_x = -1e30, hi_y = -1e30;
-  for (const auto& v : mesh.vertices) {
-    const Eigen::Vector3d p = model_to_cam * v.cast<double>();
-    if (p.z() <= 1) return box;
-    const Eigen::Vector2d s = k.project(p);
+  for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
+    const Eigen::Vector2d& s = pm->px[i];
     lo_x = std::min(lo_x, s.x()), hi_x = std::max(hi_x, s.x());
     lo_y = std::min(lo_y, s.y()), hi_y = std::max(hi_y, s.y());
   }
@@ -99,7 +112,7 @@ PixelBox render_depth_in_box(const Mesh& mesh, const Pose& model_to_cam, const I
   box.y1 = std::min(z_mm->height - 1, int(std::ceil(hi_y)));
   if (box.empty()) return box;
   for (int y = box.y0; y <= box.y1; ++y) std::fill_n(&z_mm->at(box.x0, y), box.x1 - box.x0 + 1, 0.0f);
-  draw_perspective(mesh, model_to_cam, k, box.x0, box.y0, box.x1, box.y1,
+  draw_perspective(mesh, *pm, k, box.x0, box.y0, box.x1, box.y1,
                    [&](int x, int y, float z, const Eigen::Vector3d&) {
                      float& cur = z_mm->at(x, y);
                      if (cur == 0 || z < cur) cur = z;

@@ -2,6 +2,8 @@
 // outlines) and a top-down height map (pile building). One scan-conversion serves both.
 #pragma once
 
+#include <vector>
+
 #include "core/camera.hpp"
 #include "core/image.hpp"
 #include "model/mesh.hpp"
@@ -25,10 +27,22 @@ struct PixelBox {
   bool empty() const { return x1 < x0 || y1 < y0; }
 };
 
+// The mesh's vertices in the camera frame and their pixels: each vertex is moved and projected
+// once, not once per face it belongs to. Buffers sized once, to the largest mesh drawn.
+struct ProjectedMesh {
+  std::vector<Eigen::Vector3d> cam;
+  std::vector<Eigen::Vector2d> px;
+  void reserve(const Mesh& mesh) {
+    cam.assign(mesh.vertices.size(), Eigen::Vector3d::Zero());
+    px.assign(mesh.vertices.size(), Eigen::Vector2d::Zero());
+  }
+};
+
 // Depth of the mesh alone, drawn into the part of z_mm it covers (cleared first); the rest of
 // z_mm is untouched. Returns that box (empty if the mesh is off-screen or behind the camera).
+// `projected` must have been reserved for this mesh (or a larger one).
 PixelBox render_depth_in_box(const Mesh& mesh, const Pose& model_to_cam, const Intrinsics& k,
-                             Image<float>* z_mm);
+                             Image<float>* z_mm, ProjectedMesh* projected);
 
 // A height map over the world XY plane: cell (i, j) has centre (origin + i*cell, origin + j*cell).
 struct HeightMap {

@@ -15,8 +15,8 @@ Eigen::Vector2d to_pixel(const CameraInfo& cam, const Pose& bin_to_cam, const Ei
 }
 
 void draw_outline(Image<Rgb>* img, const Mesh& mesh, const Pose& model_to_cam, const Intrinsics& k, Rgb color,
-                  int thickness, Image<float>* scratch) {
-  const PixelBox box = render_depth_in_box(mesh, model_to_cam, k, scratch);
+                  int thickness, Image<float>* scratch, ProjectedMesh* projected) {
+  const PixelBox box = render_depth_in_box(mesh, model_to_cam, k, scratch, projected);
   for (int y = box.y0; y <= box.y1; ++y)
     for (int x = box.x0; x <= box.x1; ++x) {
       if (scratch->at(x, y) <= 0) continue;
@@ -55,6 +55,8 @@ Image<Rgb> draw_locate_overlay(const Locator& loc, const Image<float>& depth, co
   }
   Image<float> scratch(depth.width, depth.height, 0.0f);
   const Mesh& mesh = loc.locator_model().model->mesh;
+  ProjectedMesh projected;
+  projected.reserve(mesh);
   const int pick = out.pick();
   for (int i = int(out.estimates.size()) - 1; i >= 0; --i) {
     const PipeEstimate& e = out.estimates[std::size_t(i)];
@@ -62,7 +64,7 @@ Image<Rgb> draw_locate_overlay(const Locator& loc, const Image<float>& depth, co
                  i == pick    ? kPick
                  : e.pickable ? kOutline
                               : kOther,
-                 i == pick ? 3 : 1, &scratch);
+                 i == pick ? 3 : 1, &scratch, &projected);
   }
   for (std::size_t c = 0; c < out.traces.size(); ++c) {
     const CandidateTrace& t = out.traces[c];

@@ -62,8 +62,11 @@ std::vector<GtInfo> visibility_info(const PipeModel& model, const SimulatedScene
   std::vector<GtInfo> info(n);
   // Each pipe alone, drawn only into the box it covers.
   Image<float> alone(scene.camera.intrinsics.width, scene.camera.intrinsics.height, 0.0f);
+  ProjectedMesh projected;
+  projected.reserve(model.mesh);
   for (int i = 0; i < n; ++i) {
-    const PixelBox box = render_depth_in_box(model.mesh, scene.model_to_cam(i), scene.camera.intrinsics, &alone);
+    const PixelBox box = render_depth_in_box(model.mesh, scene.model_to_cam(i), scene.camera.intrinsics, &alone,
+                                             &projected);
     int all = 0, visib = 0, valid = 0, by_pipes = 0;
     for (int y = box.y0; y <= box.y1; ++y)
       for (int x = box.x0; x <= box.x1; ++x) {
