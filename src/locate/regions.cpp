@@ -11,6 +11,32 @@ constexpr double kDeg = M_PI / 180.0;
 const int kDi[8] = {-1, 0, 1, -1, 1, -1, 0, 1};
 const int kDj[8] = {-1, -1, -1, 0, 0, 1, 1, 1};
 
+// Breadth-first queues keep each cell's column and row packed in one int beside its buffer
+// index: no division per visited cell.
+int pack(int i, int j) { return (j << 16) | i; }
+int column_of(int packed) { return packed & 0xffff; }
+int row_of(int packed) { return packed >> 16; }
+
+// The bounding box of a set of cells bounds its l_max (as longest_distance measures it, with
+// the coordinate axes among its directions) from below by its longest side and from above by its
+// diagonal: most sets are decided by that alone.
+struct CellBox {
+  int i0 = 1 << 30, i1 = -1, j0 = 1 << 30, j1 = -1;
+  float z0 = 1e30f, z1 = -1e30f;
+  void add(int i, int j, float z) {
+    i0 = std::min(i0, i), i1 = std::max(i1, i), j0 = std::min(j0, j), j1 = std::max(j1, j);
+    z0 = std::min(z0, z), z1 = std::max(z1, z);
+  }
+  // l_max > limit_mm, from the box when it decides, else measured.
+  bool longer_than(float limit_mm, const ZBuffer& zb, const int* cells, int count) const {
+    constexpr float kRounding = 0.01f;  // the box is in cell units, longest_distance in bin coordinates
+    const float dx = float((i1 - i0) * zb.pixel_mm), dy = float((j1 - j0) * zb.pixel_mm), dz = z1 - z0;
+    if (std::max({dx, dy, dz}) > limit_mm + kRounding) return true;
+    if (std::sqrt(dx * dx + dy * dy + dz * dz) < limit_mm - kRounding) return false;
+    return longest_distance(zb, cells, count) > limit_mm;
+  }
+};
+
 }  // namespace
 
 void reserve_regions(RegionBuffers* rb, const ZBuffer& zb, const LocateConfig& cfg, float d, float l) {
@@ -25,6 +51,7 @@ void reserve_regions(RegionBuffers* rb, const ZBuffer& zb, const LocateConfig& c
   // A pipe's visible region is at most about L x D; allow three times that before calling it a leak.
   rb->max_region_cells = int(3.0 * (l + d) * d / (zb.pixel_mm * zb.pixel_mm));
   rb->region_cells.assign(std::size_t(rb->max_region_cells) * cfg.max_candidates, 0);
+  rb->grow_queue.assign(std::size_t(rb->max_region_cells), 0);
   rb->candidates.reserve(cfg.max_candidates);
 }
 
@@ -85,21 +112,25 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
       if (rb->core_label.at(i, j) != -1 || !is_core(i, j)) continue;
       ++stats.core_regions;
       const int begin = pool;
+      CellBox box;
       rb->core_label.at(i, j) = n_cores;
+      rb->queue[pool] = pack(i, j);
       rb->core_cells[pool++] = zb.index(i, j);
       for (int head = begin; head < pool; ++head) {
-        const int ci = rb->core_cells[head] % w, cj = rb->core_cells[head] / w;
+        const int ci = column_of(rb->queue[head]), cj = row_of(rb->queue[head]);
+        box.add(ci, cj, zb.z.pixels[std::size_t(rb->core_cells[head])]);
         for (int k = 0; k < 8; ++k) {
           const int ni = ci + kDi[k], nj = cj + kDj[k];
           if (ni < 0 || nj < 0 || ni >= zb.width || nj >= zb.height) continue;
           if (rb->core_label.at(ni, nj) != -1 || !is_core(ni, nj)) continue;
           rb->core_label.at(ni, nj) = n_cores;
+          rb->queue[pool] = pack(ni, nj);
           rb->core_cells[pool++] = zb.index(ni, nj);
         }
       }
       const float area = float(pool - begin) * cell_area;
       const bool keep = area >= area_min && n_cores < kMaxCores &&
-                        longest_distance(zb, &rb->core_cells[begin], pool - begin) <= core_extent_max;
+                        !box.longer_than(core_extent_max, zb, &rb->core_cells[begin], pool - begin);
       if (keep) {
         cores[n_cores++] = {begin, pool, area};
       } else {
@@ -138,7 +169,9 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
       const int stamp = ++rb->stamp_value;
       count = 0;
       centroid = Eigen::Vector3f::Zero();
+      CellBox box;
       for (int k = cores[c].begin; k < cores[c].end && count < rb->max_region_cells; ++k) {
+        rb->grow_queue[count] = rb->queue[k];
         cells[count++] = rb->core_cells[k];
         rb->stamp.pixels[rb->core_cells[k]] = stamp;
         rb->ridge_z.pixels[rb->core_cells[k]] = zb.z.pixels[rb->core_cells[k]];
@@ -150,9 +183,10 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
       const int core_count = cores[c].end - cores[c].begin;
       int ring_cells = 0, ring_lower = 0;
       for (int head = 0; head < count; ++head) {
-        const int ci = cells[head] % w, cj = cells[head] / w;
+        const int ci = column_of(rb->grow_queue[head]), cj = row_of(rb->grow_queue[head]);
         const Eigen::Vector3f& ni_n = nm.n.at(ci, cj);
         const float zi = zb.z.at(ci, cj);
+        box.add(ci, cj, zi);
         const int reach = rb->reach.at(ci, cj) + 1;
         if (reach > reach_limit) continue;
         for (int k = 0; k < 8; ++k) {
@@ -174,6 +208,7 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
             break;
           }
           s = stamp;
+          rb->grow_queue[count] = pack(ni, nj);
           cells[count++] = zb.index(ni, nj);
           // Convex: beside the core the surface tilts away from it (plane-fit normals, not noisy heights).
           if (head < core_count)
@@ -186,8 +221,8 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
       // floor between pipes grows up their sides instead.
       if (ring_cells == 0 || float(ring_lower) < float(cfg.convexity_min_share) * float(ring_cells)) break;
       // 3. Keep regions longer than a * L.
-      extent = longest_distance(zb, cells, count);
-      found = extent > float(cfg.region_min_extent_of_l) * l;
+      found = box.longer_than(float(cfg.region_min_extent_of_l) * l, zb, cells, count);
+      if (found) extent = longest_distance(zb, cells, count);
     }
     if (!found) continue;
     CandidateRegion r;

@@ -26,7 +26,8 @@ struct RegionBuffers {
   int claim_value = 0;
   int stamp_value = 0;
   Image<float> ridge_z;                     // growth: height of the core cell each grown cell came from
-  std::vector<int> queue;                   // BFS
+  std::vector<int> queue;                   // core labelling: packed column and row of core_cells
+  std::vector<int> grow_queue;              // growth: packed column and row of the region's cells
   std::vector<int> core_cells;              // all kept cores' cells
   std::vector<int> region_cells;            // all grown regions' cells
   std::vector<CandidateRegion> candidates;  // capacity max_candidates
