@@ -113,24 +113,25 @@ const LocateOutput& Locator::locate(const Image<float>& depth, const CameraInfo&
   pool_.run(pool_.size(), &NormalTask::run, &normal_task);
   out_.times.normals_ms = ms_since(t);
 
-  t = Clock::now();
-  out_.regions = extract_candidate_regions(zb_, nm_, cfg_, lm_.tube_d_mm, lm_.extent_l_mm, &rb_);
-  out_.times.regions_ms = ms_since(t);
-
-  // Candidates are independent: the pool works them, best first, until the deadline.
-  const int n = int(rb_.candidates.size());
-  out_.traces.resize(std::size_t(n));
+  // Candidates are independent: the pool works them, best first, until the deadline. They are
+  // taken up as the regions stage hands them out, so that the other threads work candidates
+  // while one still grows regions.
+  out_.traces.assign(std::size_t(cfg_.max_candidates), CandidateTrace{});
   std::fill(slot_filled_.begin(), slot_filled_.end(), 0);
   for (Worker& wk : workers_) wk.times = {};
-  constexpr double kAverageWeight = 0.2;
-  const double serial_ms = ms_since(t_start);
-  serial_ms_avg_ =
-      serial_ms_avg_ == 0 ? serial_ms : (1 - kAverageWeight) * serial_ms_avg_ + kAverageWeight * serial_ms;
   const Clock::time_point start_by =
       deadline == Clock::time_point::max() ? deadline : deadline - ms_duration(candidate_ms_avg_);
   Frame frame{this, &depth, &camera, bin_to_cam, start_by, deadline};
   for (Worker& wk : workers_) wk.candidates_done = 0, wk.candidate_ms_sum = 0;
-  pool_.run(n, &Locator::candidate_task, &frame);
+  Handout handout;
+  handout.frame = &frame;
+  handout.t_start = t_start;
+  pool_.run(pool_.size(), &Locator::regions_and_candidates_task, &handout);
+  const int n = int(rb_.candidates.size());
+  out_.traces.resize(std::size_t(n));
+  constexpr double kAverageWeight = 0.2;
+  serial_ms_avg_ = serial_ms_avg_ == 0 ? handout.serial_ms
+                                       : (1 - kAverageWeight) * serial_ms_avg_ + kAverageWeight * handout.serial_ms;
   int done = 0;
   double done_ms = 0;
   for (const Worker& wk : workers_) done += wk.candidates_done, done_ms += wk.candidate_ms_sum;
@@ -157,6 +158,42 @@ const LocateOutput& Locator::locate(const Image<float>& depth, const CameraInfo&
   if (int(out_.estimates.size()) > cfg_.max_results) out_.estimates.resize(std::size_t(cfg_.max_results));
   out_.times.total_ms = ms_since(t_start);
   return out_;
+}
+
+void Locator::regions_and_candidates_task(void* ctx, int task, int worker) {
+  Handout& h = *static_cast<Handout*>(ctx);
+  Locator& self = *h.frame->self;
+  if (task == 0) {  // II-B: this thread grows the regions, handing each out as it is found
+    const auto t = Clock::now();
+    self.out_.regions = extract_candidate_regions(
+        self.zb_, self.nm_, self.cfg_, self.lm_.tube_d_mm, self.lm_.extent_l_mm, &self.rb_,
+        [](void* c, int found) {
+          Handout& hh = *static_cast<Handout*>(c);
+          {
+            std::lock_guard<std::mutex> lock(hh.mutex);
+            hh.found = found;
+          }
+          hh.more.notify_all();
+        },
+        &h);
+    self.out_.times.regions_ms = ms_since(t);
+    h.serial_ms = ms_since(h.t_start);
+    {
+      std::lock_guard<std::mutex> lock(h.mutex);
+      h.regions_done = true;
+    }
+    h.more.notify_all();
+  }
+  for (;;) {  // then every thread takes up the next candidate handed out
+    int c;
+    {
+      std::unique_lock<std::mutex> lock(h.mutex);
+      h.more.wait(lock, [&] { return h.next < h.found || h.regions_done; });
+      if (h.next >= h.found) return;
+      c = h.next++;
+    }
+    candidate_task(h.frame, c, worker);
+  }
 }
 
 // II-A on the pool: each step of the Z-buffer and of the hole filling in row bands, one per thread.

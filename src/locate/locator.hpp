@@ -3,6 +3,8 @@
 #pragma once
 
 #include <atomic>
+#include <condition_variable>
+#include <mutex>
 #include <vector>
 
 #include "core/camera.hpp"
@@ -114,6 +116,17 @@ class Locator {
     Clock::time_point deadline;       // begin no candidate after this
     Clock::time_point deadline_hard;  // stop a candidate's work after this
   };
+  // Hands candidate regions from the thread growing them to the threads working them.
+  struct Handout {
+    Frame* frame = nullptr;
+    Clock::time_point t_start;
+    std::mutex mutex;
+    std::condition_variable more;
+    int found = 0, next = 0;  // candidates found so far; the next one to take up
+    bool regions_done = false;
+    double serial_ms = 0;  // from the start of the cycle to the last region
+  };
+  static void regions_and_candidates_task(void* handout, int task, int worker);
   static void candidate_task(void* frame, int c, int worker);
   void work_candidate(int c, Worker& wk, const Image<float>& depth, const CameraInfo& camera,
                       const Pose& bin_to_cam, Clock::time_point deadline);

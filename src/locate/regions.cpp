@@ -81,7 +81,8 @@ float longest_distance(const ZBuffer& zb, const int* cells, int count) {
 }
 
 RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, const LocateConfig& cfg,
-                                      float d, float l, RegionBuffers* rb) {
+                                      float d, float l, RegionBuffers* rb, OnCandidateFound on_found,
+                                      void* context) {
   RegionStats stats;
   rb->candidates.clear();
   const int w = zb.z.width;
@@ -236,6 +237,7 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
     rb->candidates.push_back(r);
     for (int k = 0; k < count; ++k) rb->claim.pixels[cells[k]] = claim;
     region_pool += rb->max_region_cells;
+    if (on_found) on_found(context, int(rb->candidates.size()));
   }
   stats.candidates = int(rb->candidates.size());
   return stats;

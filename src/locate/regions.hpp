@@ -44,9 +44,12 @@ struct RegionStats {
 void reserve_regions(RegionBuffers* rb, const ZBuffer& zb, const LocateConfig& cfg, float tube_d_mm,
                      float extent_l_mm);
 
-// Fills rb->candidates, best first (largest core first).
+// Fills rb->candidates, best first (largest core first). Each candidate is complete when
+// on_found(context, candidates so far) is called after it (another thread may work it from then on).
+using OnCandidateFound = void (*)(void* context, int found);
 RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, const LocateConfig& cfg,
-                                      float tube_d_mm, float extent_l_mm, RegionBuffers* rb);
+                                      float tube_d_mm, float extent_l_mm, RegionBuffers* rb,
+                                      OnCandidateFound on_found = nullptr, void* context = nullptr);
 
 // Longest distance between two of the points (extreme points along 13 directions, then exact
 // among those): l_max of Algorithm 1.
