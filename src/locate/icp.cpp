@@ -179,8 +179,7 @@ Pose fit_rigid(const Eigen::Vector3f* src, const Eigen::Vector3f* dst, int n) {
 
 RidgeFit ridge_icp(const LocatorModel& lm, const Pose& start, const Eigen::Vector3f* obs, int n_obs,
                    const Eigen::Vector2f& axis, const LocateConfig& cfg, int max_iterations, IcpBuffers* buf,
-                   float gate_mm, float cell_mm, const Eigen::Vector3f* start_ridge,
-                   int start_ridge_count) {
+                   float gate_mm, float cell_mm, const Eigen::Vector3f* start_ridge, int start_ridge_count) {
   if (cell_mm <= 0) cell_mm = float(cfg.ridge_cell_mm);
   RidgeFit fit;
   fit.pose = start;
@@ -256,24 +255,36 @@ RefineResult refine_on_surface(const LocatorModel& lm, const Pose& start, const 
     Eigen::Matrix<double, 6, 1> b = Eigen::Matrix<double, 6, 1>::Zero();
     int inliers = 0;
     double sq = 0;
-    for (int i = 0; i < n; i += stride) {
-      const Eigen::Vector3f q = rt * (obs[i] - t);  // observed point in the model frame
-      const int s = lm.nearest_sample(q);
-      if (s < 0) continue;
-      const Eigen::Vector3f diff = q - sp[s];
-      if (diff.squaredNorm() > inlier * inlier) continue;
-      const Eigen::Vector3f nw = r * sn[s];
-      const Eigen::Vector3f mw = r * sp[s] + t - c;
-      const float res_i = nw.dot(r * diff);  // observed minus model, along the normal
-      // Moving the model by (w, v) changes the model point by w x m + v.
-      Eigen::Matrix<double, 6, 1> j;
-      j.head<3>() = mw.cross(nw).cast<double>();
-      j.tail<3>() = nw.cast<double>();
-      const double w = std::abs(res_i) < 1.5f ? 1.0 : 1.5 / std::abs(res_i);  // Huber
-      a += w * j * j.transpose();
-      b += w * j * double(res_i);
-      ++inliers;
-      sq += double(res_i) * res_i;
+    // Look-ups first, a batch at a time, then the sums: the batch's cache misses overlap instead
+    // of each waiting for the last.
+    constexpr int kBatch = 16;
+    Eigen::Vector3f batch_q[kBatch];
+    int batch_s[kBatch];
+    for (int i0 = 0; i0 < n; i0 += stride * kBatch) {
+      const int in_batch = std::min(kBatch, (n - i0 + stride - 1) / stride);
+      for (int k = 0; k < in_batch; ++k) {
+        batch_q[k] = rt * (obs[i0 + k * stride] - t);  // observed point in the model frame
+        batch_s[k] = lm.nearest_sample(batch_q[k]);
+      }
+      for (int k = 0; k < in_batch; ++k) {
+        const Eigen::Vector3f& q = batch_q[k];
+        const int s = batch_s[k];
+        if (s < 0) continue;
+        const Eigen::Vector3f diff = q - sp[s];
+        if (diff.squaredNorm() > inlier * inlier) continue;
+        const Eigen::Vector3f nw = r * sn[s];
+        const Eigen::Vector3f mw = r * sp[s] + t - c;
+        const float res_i = nw.dot(r * diff);  // observed minus model, along the normal
+        // Moving the model by (w, v) changes the model point by w x m + v.
+        Eigen::Matrix<double, 6, 1> j;
+        j.head<3>() = mw.cross(nw).cast<double>();
+        j.tail<3>() = nw.cast<double>();
+        const double w = std::abs(res_i) < 1.5f ? 1.0 : 1.5 / std::abs(res_i);  // Huber
+        a += w * j * j.transpose();
+        b += w * j * double(res_i);
+        ++inliers;
+        sq += double(res_i) * res_i;
+      }
     }
     res.inliers = inliers * stride;  // about: only the fine iterations count them all
     res.rms_mm = inliers ? float(std::sqrt(sq / inliers)) : 0.f;

@@ -130,8 +130,9 @@ const LocateOutput& Locator::locate(const Image<float>& depth, const CameraInfo&
   const int n = int(rb_.candidates.size());
   out_.traces.resize(std::size_t(n));
   constexpr double kAverageWeight = 0.2;
-  serial_ms_avg_ = serial_ms_avg_ == 0 ? handout.serial_ms
-                                       : (1 - kAverageWeight) * serial_ms_avg_ + kAverageWeight * handout.serial_ms;
+  serial_ms_avg_ = serial_ms_avg_ == 0
+                       ? handout.serial_ms
+                       : (1 - kAverageWeight) * serial_ms_avg_ + kAverageWeight * handout.serial_ms;
   int done = 0;
   double done_ms = 0;
   for (const Worker& wk : workers_) done += wk.candidates_done, done_ms += wk.candidate_ms_sum;
@@ -197,7 +198,8 @@ void Locator::regions_and_candidates_task(void* ctx, int task, int worker) {
 }
 
 // II-A on the pool: each step of the Z-buffer and of the hole filling in row bands, one per thread.
-void Locator::build_zbuffer_banded(const Image<float>& depth, const CameraInfo& camera, const Pose& bin_to_cam) {
+void Locator::build_zbuffer_banded(const Image<float>& depth, const CameraInfo& camera,
+                                   const Pose& bin_to_cam) {
   out_.valid_pixels = 0;
   zb_.width = zb_.height = 0;
   // The buffers were sized for the camera given at construction; callers check frame sizes first.
@@ -231,8 +233,8 @@ void Locator::build_zbuffer_banded(const Image<float>& depth, const CameraInfo& 
     static void fill(void* ctx, int band, int) {
       Bands& b = *static_cast<Bands*>(ctx);
       const ZBuffer& zb = b.self->zb_;
-      b.filled += fill_holes_pass(zb, b.max_spread_mm, b.lo(band, zb.height), b.self->band_holes_[std::size_t(band)],
-                                  &b.self->holes_);
+      b.filled += fill_holes_pass(zb, b.max_spread_mm, b.lo(band, zb.height),
+                                  b.self->band_holes_[std::size_t(band)], &b.self->holes_);
     }
     static void apply(void* ctx, int band, int) {
       Bands& b = *static_cast<Bands*>(ctx);

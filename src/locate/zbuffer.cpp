@@ -35,8 +35,8 @@ void reserve_zbuffer_points(ZBufferPoints* pts, int pixels, int bands) {
   pts->band.assign(std::size_t(std::max(1, bands)), {});
 }
 
-void zbuffer_points_rows(const Image<float>& depth, const Intrinsics& k, const Pose& bin_to_cam, double pixel_mm,
-                         int v0, int v1, int band, ZBufferPoints* pts) {
+void zbuffer_points_rows(const Image<float>& depth, const Intrinsics& k, const Pose& bin_to_cam,
+                         double pixel_mm, int v0, int v1, int band, ZBufferPoints* pts) {
   const Eigen::Matrix3f r = bin_to_cam.linear().transpose().cast<float>();  // camera -> bin
   const Eigen::Vector3f t = (-bin_to_cam.linear().transpose() * bin_to_cam.translation()).cast<float>();
   const float fx = float(k.fx), fy = float(k.fy), cx = float(k.cx), cy = float(k.cy);
@@ -50,7 +50,8 @@ void zbuffer_points_rows(const Image<float>& depth, const Intrinsics& k, const P
         out.w() = -1;
         continue;
       }
-      const Eigen::Vector3f p = r * Eigen::Vector3f((float(u) - cx) * d / fx, (float(v) - cy) * d / fy, d) + t;
+      const Eigen::Vector3f p =
+          r * Eigen::Vector3f((float(u) - cx) * d / fx, (float(v) - cy) * d / fy, d) + t;
       out = Eigen::Vector4f(p.x(), p.y(), p.z(), 0.5f * d / fx * inv);
       e.lo_x = std::min(e.lo_x, p.x()), e.hi_x = std::max(e.hi_x, p.x());
       e.lo_y = std::min(e.lo_y, p.y()), e.hi_y = std::max(e.hi_y, p.y());
@@ -74,7 +75,8 @@ int place_zbuffer(const ZBufferPoints& pts, int bands, ZBuffer* zb) {
   // Keep the middle of the scene when it is larger than the buffer.
   const double cap = (zb->z.width - 1) * zb->pixel_mm;
   const double cx = 0.5 * (all.lo_x + all.hi_x), cy = 0.5 * (all.lo_y + all.hi_y);
-  const double side_x = std::min<double>(all.hi_x - all.lo_x, cap), side_y = std::min<double>(all.hi_y - all.lo_y, cap);
+  const double side_x = std::min<double>(all.hi_x - all.lo_x, cap),
+               side_y = std::min<double>(all.hi_y - all.lo_y, cap);
   zb->origin_x_mm = cx - side_x / 2;
   zb->origin_y_mm = cy - side_y / 2;
   zb->width = int(side_x / zb->pixel_mm) + 1;
@@ -93,7 +95,8 @@ void splat_zbuffer_rows(const ZBufferPoints& pts, int j0, int j1, ZBuffer* zb) {
     const float half = p.w();
     if (half < 0) continue;
     const float cj = (p.y() - oy) * inv;
-    const int jlo = std::max(j0, int(round_nearest(cj - half))), jhi = std::min(j1 - 1, int(round_nearest(cj + half)));
+    const int jlo = std::max(j0, int(round_nearest(cj - half))),
+              jhi = std::min(j1 - 1, int(round_nearest(cj + half)));
     if (jlo > jhi) continue;
     const float ci = (p.x() - ox) * inv;
     const int i0 = std::max(0, int(round_nearest(ci - half))),

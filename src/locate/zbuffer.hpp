@@ -44,8 +44,9 @@ struct ZBufferPoints {
     float lo_x = 1e30f, lo_y = 1e30f, hi_x = -1e30f, hi_y = -1e30f;
     int valid = 0;
   };
-  std::vector<Eigen::Vector4f> p;  // per depth pixel: x, y, z (bin), footprint half-width in cells (< 0: none)
-  std::vector<Extent> band;        // per image-row band: extent of its valid points
+  std::vector<Eigen::Vector4f>
+      p;                     // per depth pixel: x, y, z (bin), footprint half-width in cells (< 0: none)
+  std::vector<Extent> band;  // per image-row band: extent of its valid points
 };
 void reserve_zbuffer_points(ZBufferPoints* pts, int pixels, int bands);
 
@@ -61,8 +62,8 @@ int place_zbuffer(const ZBufferPoints& pts, int bands, ZBuffer* zb);
 void splat_zbuffer_rows(const ZBufferPoints& pts, int j0, int j1, ZBuffer* zb);
 
 // The three in one band: fills zb from a depth image. Returns the number of valid depth pixels.
-int build_zbuffer(const Image<float>& depth_mm, const Intrinsics& k, const Pose& bin_to_cam, ZBufferPoints* pts,
-                  ZBuffer* zb);
+int build_zbuffer(const Image<float>& depth_mm, const Intrinsics& k, const Pose& bin_to_cam,
+                  ZBufferPoints* pts, ZBuffer* zb);
 
 // Share of pts (bin frame) whose cell holds an observed height more than tol_mm below them: the
 // sensor saw through where they would be. Cells with no reading or a higher one say nothing.

@@ -75,7 +75,8 @@ int extract_zridge(const PosedPoints& pts, const Eigen::Vector2f& axis, float ce
     for (int k = 0; k < n_taken; ++k) bin(rb->uvz[std::size_t(k)], rb->index[std::size_t(k)]);
   } else {  // more points than the buffers were sized for: projected again, none dropped
     for (int k = 0; k < pts.count; k += stride)
-      if (!pts.normals || pts.normals[k].dot(up_in_input) > kFacingDown) bin(to_uvz * pts.points[k] + uvz_t, k);
+      if (!pts.normals || pts.normals[k].dot(up_in_input) > kFacingDown)
+        bin(to_uvz * pts.points[k] + uvz_t, k);
   }
   const auto emit = [&](std::size_t cell_index) {
     return Eigen::Vector3f(r * pts.points[rb->top_i[cell_index]] + t);
