@@ -41,6 +41,22 @@ TEST(PipeModel, PresetsMeasureTheirDiameterWhateverTheWinding) {
   }
 }
 
+TEST(Mesh, ClosedWindingTellsOutwardInwardAndOpen) {
+  for (const char* name : {"sbend", "u", "torus"}) {
+    Mesh mesh = make_pipe(pipe_preset(name));
+    EXPECT_EQ(closed_winding(mesh), Winding::outward) << name;
+    Mesh flipped = mesh;
+    for (auto& f : flipped.faces) std::swap(f[1], f[2]);
+    EXPECT_EQ(closed_winding(flipped), Winding::inward) << name;
+    Mesh holed = mesh;
+    holed.faces.pop_back();
+    EXPECT_EQ(closed_winding(holed), Winding::open) << name;
+    Mesh mixed = mesh;
+    std::swap(mixed.faces[0][1], mixed.faces[0][2]);  // one face wound against its neighbours
+    EXPECT_EQ(closed_winding(mixed), Winding::open) << name;
+  }
+}
+
 TEST(PipeModel, TorusLikePipeHasOneHalfTurnSymmetryAndSBendNone) {
   const PipeModel torus = derive_pipe_model(make_pipe(pipe_preset("torus")), "torus");
   ASSERT_EQ(torus.symmetries.size(), 1u);

@@ -418,7 +418,7 @@ void Locator::work_candidate(int c, Worker& wk, const Image<float>& depth, const
     PipeEstimate e;
     e.model_to_bin = refined.pose;
     e.model_to_cam = bin_to_cam * refined.pose;
-    e.check = verify_pose(lm_.verify_mesh, e.model_to_cam, depth, camera.intrinsics,
+    e.check = verify_pose(lm_.verify_mesh, lm_.verify_winding, e.model_to_cam, depth, camera.intrinsics,
                           float(cfg_.verify_tolerance_mm), &wk.scratch_depth, &wk.scratch_mesh);
     wk.times.verify_ms += ms_since(t);
     e.ridge_cost_mm = wk.fits[i].cost_mm;

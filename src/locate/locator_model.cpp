@@ -93,6 +93,7 @@ LocatorModel prepare_locator_model(const PipeModel& model, float margin_mm, cons
     lm.ridge_normals.push_back(model.surface.normals[i]);
   }
   lm.verify_mesh = weld_vertices(model.mesh, std::max(0.5f, lm.tube_d_mm / 8));
+  lm.verify_winding = closed_winding(model.mesh);
   const std::size_t vstride = std::max<std::size_t>(1, model.mesh.vertices.size() / 64);
   for (std::size_t i = 0; i < model.mesh.vertices.size(); i += vstride)
     lm.check_points.push_back(model.mesh.vertices[i]);

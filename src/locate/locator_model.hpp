@@ -20,6 +20,8 @@ struct LocatorModel {
   // The mesh verification renders: vertices merged on a grid of D/8 (within a pixel's footprint at
   // the bin's depth, several times fewer triangles to draw per hypothesis).
   Mesh verify_mesh;
+  // How the model's faces wind if it is closed; the merged mesh keeps each face's winding.
+  Winding verify_winding = Winding::open;
   float tube_d_mm = 0, extent_l_mm = 0;
   // How far an initial state may be slid to cover a partial view: across the principal axis,
   // half the model's width beside the tube (one leg of a U onto the other); along it, L/4.

@@ -2,10 +2,11 @@
 
 namespace pipeloc {
 
-Verification verify_pose(const Mesh& mesh, const Pose& model_to_cam, const Image<float>& depth,
-                         const Intrinsics& k, float tol, Image<float>* scratch, ProjectedMesh* projected) {
+Verification verify_pose(const Mesh& mesh, Winding winding, const Pose& model_to_cam,
+                         const Image<float>& depth, const Intrinsics& k, float tol, Image<float>* scratch,
+                         ProjectedMesh* projected) {
   Verification v;
-  const PixelBox box = render_depth_in_box(mesh, model_to_cam, k, scratch, projected);
+  const PixelBox box = render_depth_in_box(mesh, model_to_cam, k, scratch, projected, winding);
   for (int y = box.y0; y <= box.y1; ++y)
     for (int x = box.x0; x <= box.x1; ++x) {
       const float zm = scratch->at(x, y);

@@ -21,9 +21,9 @@ struct Verification {
 };
 
 // scratch: camera-sized image whose contents are overwritten in the model's box; projected:
-// reserved for the mesh.
-Verification verify_pose(const Mesh& mesh, const Pose& model_to_cam, const Image<float>& depth_mm,
-                         const Intrinsics& k, float tolerance_mm, Image<float>* scratch,
-                         ProjectedMesh* projected);
+// reserved for the mesh. winding: of the mesh, if closed (its back faces are then not drawn).
+Verification verify_pose(const Mesh& mesh, Winding winding, const Pose& model_to_cam,
+                         const Image<float>& depth_mm, const Intrinsics& k, float tolerance_mm,
+                         Image<float>* scratch, ProjectedMesh* projected);
 
 }  // namespace pipeloc

@@ -24,6 +24,24 @@ float Mesh::surface_area() const {
   return sum;
 }
 
+Winding closed_winding(const Mesh& mesh) {
+  std::map<std::pair<int, int>, int> directed;
+  for (const auto& f : mesh.faces)
+    for (int k = 0; k < 3; ++k) ++directed[{f[std::size_t(k)], f[std::size_t((k + 1) % 3)]}];
+  for (const auto& [edge, count] : directed) {
+    if (count != 1) return Winding::open;
+    const auto reverse = directed.find({edge.second, edge.first});
+    if (reverse == directed.end() || reverse->second != 1) return Winding::open;
+  }
+  // Signed volume: sum of the tetrahedra from the origin to each face.
+  double volume = 0;
+  for (const auto& f : mesh.faces)
+    volume += mesh.vertices[f[0]].cast<double>().dot(
+        mesh.vertices[f[1]].cast<double>().cross(mesh.vertices[f[2]].cast<double>()));
+  if (volume == 0) return Winding::open;
+  return volume > 0 ? Winding::outward : Winding::inward;
+}
+
 Mesh weld_vertices(const Mesh& soup, float tol_mm) {
   using Key = std::tuple<long, long, long>;
   std::map<Key, int> index;

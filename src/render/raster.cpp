@@ -55,12 +55,15 @@ bool project_vertices(const Mesh& mesh, const Pose& model_to_cam, const Intrinsi
 // the box, with the exact depth of the triangle's plane along that pixel's ray.
 template <typename OnPixel>
 void draw_perspective(const Mesh& mesh, const ProjectedMesh& pm, const Intrinsics& k, int x0, int y0, int x1,
-                      int y1, OnPixel on_pixel) {
+                      int y1, Winding winding, OnPixel on_pixel) {
   const Eigen::Vector2d corner(x0, y0);
+  // A face is turned away when its outward normal points away from the camera (at the origin).
+  const double away = winding == Winding::outward ? 1 : winding == Winding::inward ? -1 : 0;
   for (const auto& f : mesh.faces) {
     const Eigen::Vector3d &p0 = pm.cam[f[0]], &p1 = pm.cam[f[1]], &p2 = pm.cam[f[2]];
     if (p0.z() <= 1 || p1.z() <= 1 || p2.z() <= 1) continue;  // behind or at the lens
     Eigen::Vector3d n = (p1 - p0).cross(p2 - p0);
+    if (away * n.dot(p0) > 0) continue;
     if (n.norm() < 1e-12) continue;
     n.normalize();
     if (n.dot(p0) > 0) n = -n;  // face the camera: depth images see either side
@@ -84,7 +87,7 @@ void render_perspective(const Mesh& mesh, const Pose& model_to_cam, const Intrin
   ProjectedMesh pm;
   pm.reserve(mesh);
   project_vertices(mesh, model_to_cam, k, &pm);
-  draw_perspective(mesh, pm, k, 0, 0, target->z_mm.width - 1, target->z_mm.height - 1,
+  draw_perspective(mesh, pm, k, 0, 0, target->z_mm.width - 1, target->z_mm.height - 1, Winding::open,
                    [&](int x, int y, float z, const Eigen::Vector3d& n) {
                      float& cur = target->z_mm.at(x, y);
                      if (cur == 0 || z < cur) {
@@ -96,7 +99,7 @@ void render_perspective(const Mesh& mesh, const Pose& model_to_cam, const Intrin
 }
 
 PixelBox render_depth_in_box(const Mesh& mesh, const Pose& model_to_cam, const Intrinsics& k,
-                             Image<float>* z_mm, ProjectedMesh* pm) {
+                             Image<float>* z_mm, ProjectedMesh* pm, Winding winding) {
   PixelBox box;
   if (mesh.vertices.empty() || pm->cam.size() < mesh.vertices.size()) return box;
   if (!project_vertices(mesh, model_to_cam, k, pm)) return box;
@@ -112,7 +115,7 @@ PixelBox render_depth_in_box(const Mesh& mesh, const Pose& model_to_cam, const I
   box.y1 = std::min(z_mm->height - 1, int(std::ceil(hi_y)));
   if (box.empty()) return box;
   for (int y = box.y0; y <= box.y1; ++y) std::fill_n(&z_mm->at(box.x0, y), box.x1 - box.x0 + 1, 0.0f);
-  draw_perspective(mesh, *pm, k, box.x0, box.y0, box.x1, box.y1,
+  draw_perspective(mesh, *pm, k, box.x0, box.y0, box.x1, box.y1, winding,
                    [&](int x, int y, float z, const Eigen::Vector3d&) {
                      float& cur = z_mm->at(x, y);
                      if (cur == 0 || z < cur) cur = z;

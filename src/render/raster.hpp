@@ -40,9 +40,11 @@ struct ProjectedMesh {
 
 // Depth of the mesh alone, drawn into the part of z_mm it covers (cleared first); the rest of
 // z_mm is untouched. Returns that box (empty if the mesh is off-screen or behind the camera).
-// `projected` must have been reserved for this mesh (or a larger one).
+// `projected` must have been reserved for this mesh (or a larger one). For a mesh known to be
+// closed (`winding` not open), the faces turned away from the camera are skipped: the nearest
+// surface along a ray into a closed mesh is always one facing the camera.
 PixelBox render_depth_in_box(const Mesh& mesh, const Pose& model_to_cam, const Intrinsics& k,
-                             Image<float>* z_mm, ProjectedMesh* projected);
+                             Image<float>* z_mm, ProjectedMesh* projected, Winding winding = Winding::open);
 
 // A height map over the world XY plane: cell (i, j) has centre (origin + i*cell, origin + j*cell).
 struct HeightMap {
