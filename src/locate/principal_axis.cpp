@@ -9,38 +9,53 @@ void reserve_axis(AxisBuffers* buf, int max_cells, int w, int h) {
   buf->line.assign(std::size_t(max_cells), 0);
   buf->along.assign(std::size_t(max_cells), 0);
   buf->sorted.assign(std::size_t(max_cells), 0);
-  buf->start.assign(std::size_t(w + h + 4), 0);  // lines cross the region: at most its diagonal
+  buf->order.assign(std::size_t(max_cells), 0);
+  buf->start.assign(std::size_t(w + h + 4), 0);           // lines cross the region: at most its diagonal
+  buf->by_along.assign(std::size_t(4 * (w + h) + 8), 0);  // so do positions along them, in quarter cells
 }
 
 int count_sections(const ZBuffer& zb, const int* cells, int count, float theta, float min_w, float max_w,
                    AxisBuffers* buf) {
-  // Scan lines run along (cos, sin), one cell apart. Cells are grouped by line (a counting
-  // sort), then ordered along each line, so consecutive entries of a line form runs.
+  // Scan lines run along (cos, sin), one cell apart. Cells are ordered along the scan direction,
+  // then grouped by line keeping that order (two counting sorts), so consecutive entries of a
+  // line form runs.
   const float c = std::cos(theta), s = std::sin(theta);
   const int w = zb.z.width;
   const float p = float(zb.pixel_mm);
-  int lmin = 1 << 30, lmax = -(1 << 30);
+  int lmin = 1 << 30, lmax = -(1 << 30), amin = 1 << 30, amax = -(1 << 30);
   for (int k = 0; k < count; ++k) {
     const float x = float(cells[k] % w), y = float(cells[k] / w);
     const int line = int(round_nearest(-x * s + y * c));
+    const int along = int(round_nearest((x * c + y * s) * 4));  // quarter cells
     buf->line[std::size_t(k)] = line;
-    buf->along[std::size_t(k)] = int(round_nearest((x * c + y * s) * 4));  // quarter cells
+    buf->along[std::size_t(k)] = along;
     lmin = std::min(lmin, line), lmax = std::max(lmax, line);
+    amin = std::min(amin, along), amax = std::max(amax, along);
   }
-  if (count == 0 || lmax - lmin + 2 > int(buf->start.size())) return 0;
+  if (count == 0 || lmax - lmin + 2 > int(buf->start.size()) || amax - amin + 2 > int(buf->by_along.size()))
+    return 0;
+  // By position along the scan direction ...
+  const int positions = amax - amin + 1;
+  int* by_along = buf->by_along.data();
+  std::fill_n(by_along, positions + 1, 0);
+  for (int k = 0; k < count; ++k) ++by_along[buf->along[std::size_t(k)] - amin + 1];
+  for (int a = 0; a < positions; ++a) by_along[a + 1] += by_along[a];
+  for (int k = 0; k < count; ++k) buf->order[std::size_t(by_along[buf->along[std::size_t(k)] - amin]++)] = k;
+  // ... then by line, in that order.
   const int lines = lmax - lmin + 1;
   int* start = buf->start.data();
   std::fill_n(start, lines + 1, 0);
   for (int k = 0; k < count; ++k) ++start[buf->line[std::size_t(k)] - lmin + 1];
   for (int l = 0; l < lines; ++l) start[l + 1] += start[l];
-  for (int k = 0; k < count; ++k)
+  for (int o = 0; o < count; ++o) {
+    const int k = buf->order[std::size_t(o)];
     buf->sorted[std::size_t(start[buf->line[std::size_t(k)] - lmin]++)] = buf->along[std::size_t(k)];
+  }
   // start[l] now ends line l: line l spans [start[l-1], start[l]).
   int sections = 0;
   for (int l = 0, b = 0; l < lines; b = start[l], ++l) {
-    int* a = buf->sorted.data() + b;
+    const int* a = buf->sorted.data() + b;
     const int n = start[l] - b;
-    std::sort(a, a + n);
     int k = 0;
     while (k < n) {
       int e = k;

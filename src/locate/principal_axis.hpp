@@ -20,7 +20,9 @@ struct AxisEstimate {
 struct AxisBuffers {
   std::vector<int> line, along;  // per region cell; capacity: the largest region
   std::vector<int> start;        // per scan line: where its cells begin in `sorted`
-  std::vector<int> sorted;       // cells' along-positions grouped by line
+  std::vector<int> by_along;     // per along-position (quarter cells): where its cells begin in `order`
+  std::vector<int> order;        // cells in order along the scan direction
+  std::vector<int> sorted;       // cells' along-positions grouped by line, in order along each
 };
 // Sizes the buffers for regions of up to max_cells cells of a Z-buffer up to w x h cells.
 void reserve_axis(AxisBuffers* buf, int max_cells, int w, int h);
