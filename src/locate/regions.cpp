@@ -41,7 +41,7 @@ struct CellBox {
 
 void reserve_regions(RegionBuffers* rb, const ZBuffer& zb, const LocateConfig& cfg, float d, float l) {
   const std::size_t cells = zb.z.pixels.size();
-  rb->core_label.resize(zb.z.width, zb.z.height, -1);
+  rb->unlabelled_core.resize(zb.z.width, zb.z.height, 0);
   rb->stamp.resize(zb.z.width, zb.z.height, 0);
   rb->reach.resize(zb.z.width, zb.z.height, 0);
   rb->claim.resize(zb.z.width, zb.z.height, 0);
@@ -95,8 +95,10 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
   const float area_min = float(cfg.core_min_area_of_d2) * d * d;
   const float core_extent_max = float(cfg.core_max_extent_of_l) * l;
 
-  for (int j = 0; j < zb.height; ++j) std::fill_n(&rb->core_label.at(0, j), zb.width, -1);
-  auto is_core = [&](int i, int j) { return nm.n.at(i, j).z() > up_min; };
+  // Upward cells are marked once; labelling then reads one byte per neighbour.
+  Image<std::uint8_t>& open = rb->unlabelled_core;
+  for (int j = 0; j < zb.height; ++j)
+    for (int i = 0; i < zb.width; ++i) open.at(i, j) = nm.n.at(i, j).z() > up_min;
 
   // 1. Connected regions (8-connectivity) of upward normals with A_n >= A_th.
   struct Core {
@@ -110,11 +112,11 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
   int n_cores = 0;
   for (int j = 0; j < zb.height; ++j) {
     for (int i = 0; i < zb.width; ++i) {
-      if (rb->core_label.at(i, j) != -1 || !is_core(i, j)) continue;
+      if (!open.at(i, j)) continue;
       ++stats.core_regions;
       const int begin = pool;
       CellBox box;
-      rb->core_label.at(i, j) = n_cores;
+      open.at(i, j) = 0;
       rb->queue[pool] = pack(i, j);
       rb->core_cells[pool++] = zb.index(i, j);
       for (int head = begin; head < pool; ++head) {
@@ -123,8 +125,8 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
         for (int k = 0; k < 8; ++k) {
           const int ni = ci + kDi[k], nj = cj + kDj[k];
           if (ni < 0 || nj < 0 || ni >= zb.width || nj >= zb.height) continue;
-          if (rb->core_label.at(ni, nj) != -1 || !is_core(ni, nj)) continue;
-          rb->core_label.at(ni, nj) = n_cores;
+          if (!open.at(ni, nj)) continue;
+          open.at(ni, nj) = 0;
           rb->queue[pool] = pack(ni, nj);
           rb->core_cells[pool++] = zb.index(ni, nj);
         }
@@ -132,12 +134,10 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
       const float area = float(pool - begin) * cell_area;
       const bool keep = area >= area_min && n_cores < kMaxCores &&
                         !box.longer_than(core_extent_max, zb, &rb->core_cells[begin], pool - begin);
-      if (keep) {
+      if (keep)
         cores[n_cores++] = {begin, pool, area};
-      } else {
-        for (int c = begin; c < pool; ++c) rb->core_label.pixels[rb->core_cells[c]] = -2;  // seen, dropped
-        pool = begin;
-      }
+      else
+        pool = begin;  // seen, dropped
     }
   }
   stats.cores_kept = n_cores;

@@ -2,6 +2,7 @@
 // when longer than a * L.
 #pragma once
 
+#include <cstdint>
 #include <vector>
 
 #include "locate/locate_config.hpp"
@@ -19,7 +20,7 @@ struct CandidateRegion {
 
 // Fixed-size working memory, sized once for a Z-buffer and a model.
 struct RegionBuffers {
-  Image<int> core_label;  // -1 none, else core index (this frame)
+  Image<std::uint8_t> unlabelled_core;  // 1: upward normal, not yet in a core (this frame)
   Image<int> stamp;       // growth visit marks
   Image<int> reach;       // growth: steps from the core
   Image<int> claim;       // the frame's mark on cells of regions already taken up
