@@ -53,13 +53,14 @@ void compute_normals_rows(const ZBuffer& zb, int window, int min_valid, int j0, 
       out.setZero();
       if (std::isnan(zb.z.at(i, j)) || s[0] < min_valid) continue;
       // Least squares in coordinates centred on the window's mean (well conditioned).
-      const double n = s[0], mi = s[1] / n, mj = s[2] / n, mz = s[6] / n;
-      const double cii = s[3] / n - mi * mi, cij = s[4] / n - mi * mj, cjj = s[5] / n - mj * mj;
-      const double ciz = s[7] / n - mi * mz, cjz = s[8] / n - mj * mz;
+      const double inv_n = 1 / s[0], mi = s[1] * inv_n, mj = s[2] * inv_n, mz = s[6] * inv_n;
+      const double cii = s[3] * inv_n - mi * mi, cij = s[4] * inv_n - mi * mj, cjj = s[5] * inv_n - mj * mj;
+      const double ciz = s[7] * inv_n - mi * mz, cjz = s[8] * inv_n - mj * mz;
       const double det = cii * cjj - cij * cij;
       if (det < 1e-9) continue;
-      const double a = (ciz * cjj - cjz * cij) / det;  // dz/di
-      const double b = (cjz * cii - ciz * cij) / det;  // dz/dj
+      const double inv_det = 1 / det;
+      const double a = (ciz * cjj - cjz * cij) * inv_det;  // dz/di
+      const double b = (cjz * cii - ciz * cij) * inv_det;  // dz/dj
       out = Eigen::Vector3f(float(-a / zb.pixel_mm), float(-b / zb.pixel_mm), 1.0f).normalized();
     }
   }
