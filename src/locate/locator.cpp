@@ -339,6 +339,11 @@ void Locator::work_candidate(int c, Worker& wk, const Image<float>& depth, const
             [](const SlidStart& a, const SlidStart& b) { return a.cost_mm < b.cost_mm; });
   if (int(wk.starts.size()) > cfg_.icp_probed_states) wk.starts.resize(std::size_t(cfg_.icp_probed_states));
   for (const SlidStart& st : wk.starts) {
+    // A slow configuration probes long: the deadline (or a shutdown) is checked per start.
+    if (out_of_time(deadline)) {
+      wk.times.ridge_icp_ms += ms_since(t);
+      return;
+    }
     wk.fits.push_back(ridge_icp(lm_, st.pose, wk.coarse_ridge.data(), n_coarse, trace.axis.axis, cfg_,
                                 cfg_.icp_probe_iterations, &wk.icp, -1, probe_cell, starts_.ridge(st.start),
                                 starts_.ridge_count(st.start)));
