@@ -1,5 +1,7 @@
 #include "locate/icp.hpp"
 
+#include <emmintrin.h>
+
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
@@ -7,7 +9,7 @@
 namespace pipeloc {
 namespace {
 
-// Nearest of pts[0..n) to q (brute force: ridges hold a few hundred points).
+// Nearest of pts[0..n) to q (brute force: ridges hold a few hundred points); the first of equals.
 int nearest(const Eigen::Vector3f& q, const Eigen::Vector3f* pts, int n, float* d2) {
   int best = -1;
   float bd = 1e30f;
@@ -17,6 +19,32 @@ int nearest(const Eigen::Vector3f& q, const Eigen::Vector3f* pts, int n, float* 
   }
   *d2 = bd;
   return best;
+}
+
+// The same on columns: the distances in one pass the compiler vectorizes, their minimum four at
+// a time, then the first point at that distance. Same sums in the same order, same answer.
+int nearest(const Eigen::Vector3f& q, PointColumns* c, float* d2) {
+  const int n = c->n;
+  const float qx = q.x(), qy = q.y(), qz = q.z();
+  const float *x = c->x.data(), *y = c->y.data(), *z = c->z.data();
+  float* d = c->d2.data();
+  for (int i = 0; i < n; ++i) {
+    const float dx = x[i] - qx, dy = y[i] - qy, dz = z[i] - qz;
+    d[i] = dx * dx + dy * dy + dz * dz;
+  }
+  __m128 low4 = _mm_set1_ps(1e30f);
+  int i = 0;
+  for (; i + 4 <= n; i += 4) low4 = _mm_min_ps(low4, _mm_loadu_ps(d + i));
+  alignas(16) float lanes[4];
+  _mm_store_ps(lanes, low4);
+  float low = std::min(std::min(lanes[0], lanes[1]), std::min(lanes[2], lanes[3]));
+  for (; i < n; ++i) low = std::min(low, d[i]);
+  *d2 = 1e30f;
+  if (!(low < 1e30f)) return -1;
+  for (i = 0; d[i] != low; ++i) {
+  }
+  *d2 = low;
+  return i;
 }
 
 int model_ridge(const LocatorModel& lm, const Pose& pose, const Eigen::Vector2f& axis, float cell_mm,
@@ -34,14 +62,25 @@ int model_ridge(const LocatorModel& lm, const Pose& pose, const Eigen::Vector2f&
 }
 
 // Mean of min(distance, cap) from each of a to its nearest in b.
-float truncated_mean(const Eigen::Vector3f* a, int na, const Eigen::Vector3f* b, int nb, float cap,
-                     int* matched) {
+// A point set searched by nearest(): on its columns when they hold it, else point by point.
+struct SearchSet {
+  const Eigen::Vector3f* p;
+  int n;
+  PointColumns* columns;  // null: not laid out (more points than reserved for)
+  SearchSet(const Eigen::Vector3f* points, int count, PointColumns* cols)
+      : p(points), n(count), columns(cols->assign(points, count) ? cols : nullptr) {}
+  int nearest_to(const Eigen::Vector3f& q, float* d2) const {
+    return columns ? nearest(q, columns, d2) : nearest(q, p, n, d2);
+  }
+};
+
+float truncated_mean(const Eigen::Vector3f* a, int na, const SearchSet& b, float cap, int* matched) {
   if (na == 0) return cap;
   float sum = 0;
   int m = 0;
   for (int i = 0; i < na; ++i) {
     float d2;
-    nearest(a[i], b, nb, &d2);
+    b.nearest_to(a[i], &d2);
     const float d = std::sqrt(d2);
     if (d < cap) ++m;
     sum += std::min(d, cap);
@@ -52,11 +91,29 @@ float truncated_mean(const Eigen::Vector3f* a, int na, const Eigen::Vector3f* b,
 
 }  // namespace
 
+void PointColumns::reserve(int capacity) {
+  x.assign(std::size_t(capacity), 0.0f);
+  y.assign(std::size_t(capacity), 0.0f);
+  z.assign(std::size_t(capacity), 0.0f);
+  d2.assign(std::size_t(capacity), 0.0f);
+  n = 0;
+}
+
+bool PointColumns::assign(const Eigen::Vector3f* p, int count) {
+  if (count > int(x.size())) return false;
+  for (int i = 0; i < count; ++i)
+    x[std::size_t(i)] = p[i].x(), y[std::size_t(i)] = p[i].y(), z[std::size_t(i)] = p[i].z();
+  n = count;
+  return true;
+}
+
 void reserve_icp(IcpBuffers* buf, const LocatorModel& lm, int max_ridge_points, float ridge_cell_mm,
                  int max_region_points) {
   buf->model_ridge.assign(std::size_t(max_ridge_points), Eigen::Vector3f::Zero());
   buf->src.assign(std::size_t(2 * max_ridge_points), Eigen::Vector3f::Zero());
   buf->dst.assign(std::size_t(2 * max_ridge_points), Eigen::Vector3f::Zero());
+  buf->observed_columns.reserve(max_ridge_points);
+  buf->model_columns.reserve(max_ridge_points);
   // The top views span a pipe and a diameter of margin each side, in cells of half the finest ridge.
   const int side = int((lm.extent_l_mm + 4 * lm.tube_d_mm) / (0.5f * ridge_cell_mm)) + 2;
   buf->observed_top.reserve(side);
@@ -186,6 +243,7 @@ RidgeFit ridge_icp(const LocatorModel& lm, const Pose& start, const Eigen::Vecto
   const float d = lm.tube_d_mm;
   // Correspondences farther than this are dropped; it shrinks from a third of the pipe to D/2.
   float gate = gate_mm > 0 ? gate_mm : std::max(lm.extent_l_mm / 3, d);
+  const SearchSet observed(obs, n_obs, &buf->observed_columns);
   for (int it = 0; it < max_iterations; ++it) {
     fit.iterations = it + 1;
     int nm = 0;  // 2.2.1
@@ -197,10 +255,11 @@ RidgeFit ridge_icp(const LocatorModel& lm, const Pose& start, const Eigen::Vecto
     } else {
       nm = model_ridge(lm, fit.pose, axis, cell_mm, cfg, buf);
     }
+    const SearchSet model(buf->model_ridge.data(), nm, &buf->model_columns);
     int pairs = 0;
     for (int i = 0; i < nm; ++i) {  // 2.2.2
       float d2;
-      const int j = nearest(buf->model_ridge[i], obs, n_obs, &d2);
+      const int j = observed.nearest_to(buf->model_ridge[i], &d2);
       if (j < 0 || d2 > gate * gate) continue;
       buf->src[pairs] = buf->model_ridge[i];
       buf->dst[pairs] = obs[j];
@@ -210,7 +269,7 @@ RidgeFit ridge_icp(const LocatorModel& lm, const Pose& start, const Eigen::Vecto
     // towards parts that were not observed.
     for (int j = 0; j < n_obs && pairs < int(buf->src.size()); ++j) {
       float d2;
-      const int i = nearest(obs[j], buf->model_ridge.data(), nm, &d2);
+      const int i = model.nearest_to(obs[j], &d2);
       if (i < 0 || d2 > gate * gate) continue;
       buf->src[pairs] = buf->model_ridge[i];
       buf->dst[pairs] = obs[j];
@@ -228,8 +287,9 @@ RidgeFit ridge_icp(const LocatorModel& lm, const Pose& start, const Eigen::Vecto
   fit.model_ridge_points = nm;
   fit.gate_mm = gate;
   const float cap = 0.5f * d;
-  const float m2o = truncated_mean(buf->model_ridge.data(), nm, obs, n_obs, cap, &fit.matched);
-  const float o2m = truncated_mean(obs, n_obs, buf->model_ridge.data(), nm, cap, nullptr);
+  const float m2o = truncated_mean(buf->model_ridge.data(), nm, observed, cap, &fit.matched);
+  const float o2m =
+      truncated_mean(obs, n_obs, SearchSet(buf->model_ridge.data(), nm, &buf->model_columns), cap, nullptr);
   fit.cost_mm = 0.5f * (m2o + o2m);
   return fit;
 }

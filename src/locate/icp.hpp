@@ -25,9 +25,20 @@ struct TopDistance {
   }
 };
 
+// A point set laid out by coordinate, for nearest-point scans four points at a time.
+struct PointColumns {
+  std::vector<float> x, y, z;
+  std::vector<float> d2;  // scratch: squared distance of each point to the query
+  int n = 0;
+  void reserve(int capacity);
+  // false (and nothing assigned) if count exceeds the capacity reserved
+  bool assign(const Eigen::Vector3f* points, int count);
+};
+
 struct IcpBuffers {
   std::vector<Eigen::Vector3f> model_ridge;  // P_m
   std::vector<Eigen::Vector3f> src, dst;     // correspondences
+  PointColumns observed_columns, model_columns;
   RidgeBuffers ridge;
   TopDistance observed_top;  // for slide_start
 };
