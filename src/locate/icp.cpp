@@ -39,12 +39,8 @@ int nearest(const Eigen::Vector3f& q, PointColumns* c, float* d2) {
   _mm_store_ps(lanes, low4);
   float low = std::min(std::min(lanes[0], lanes[1]), std::min(lanes[2], lanes[3]));
   for (; i < n; ++i) low = std::min(low, d[i]);
-  *d2 = 1e30f;
-  if (!(low < 1e30f)) return -1;
-  for (i = 0; d[i] != low; ++i) {
-  }
   *d2 = low;
-  return i;
+  return low < 1e30f ? int(std::find(d, d + n, low) - d) : -1;
 }
 
 int model_ridge(const LocatorModel& lm, const Pose& pose, const Eigen::Vector2f& axis, float cell_mm,

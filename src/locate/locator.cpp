@@ -105,8 +105,8 @@ const LocateOutput& Locator::locate(const Image<float>& depth, const CameraInfo&
     static void run(void* ctx, int band, int) {
       const NormalTask& t = *static_cast<const NormalTask*>(ctx);
       const ZBuffer& zb = t.self->zb_;
-      const int j0 = zb.height * band / t.bands, j1 = zb.height * (band + 1) / t.bands;
-      compute_normals_rows(zb, t.window, t.min_valid, j0, j1,
+      compute_normals_rows(zb, t.window, t.min_valid, band_begin(band, t.bands, zb.height),
+                           band_begin(band + 1, t.bands, zb.height),
                            t.self->nm_.column.data() + std::size_t(band) * 9 * zb.z.width, &t.self->nm_);
     }
   } normal_task{this, window, int(cfg_.normal_min_valid_share * window * window), pool_.size()};
@@ -212,8 +212,8 @@ void Locator::build_zbuffer_banded(const Image<float>& depth, const CameraInfo& 
     int bands;
     float max_spread_mm;
     std::atomic<int> filled{0};
-    int lo(int band, int rows) const { return rows * band / bands; }
-    int hi(int band, int rows) const { return rows * (band + 1) / bands; }
+    int lo(int band, int rows) const { return band_begin(band, bands, rows); }
+    int hi(int band, int rows) const { return band_begin(band + 1, bands, rows); }
     static void points(void* ctx, int band, int) {
       Bands& b = *static_cast<Bands*>(ctx);
       zbuffer_points_rows(*b.depth, *b.k, *b.bin_to_cam, b.self->zb_.pixel_mm, b.lo(band, b.depth->height),

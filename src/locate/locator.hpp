@@ -131,6 +131,8 @@ class Locator {
   void work_candidate(int c, Worker& wk, const Image<float>& depth, const CameraInfo& camera,
                       const Pose& bin_to_cam, Clock::time_point deadline);
   void merge_estimate(int c);
+  // Row bands of the frame-wide stages: band b of n covers rows [band_begin(b), band_begin(b + 1)).
+  static int band_begin(int band, int bands, int rows) { return rows * band / bands; }
   void build_zbuffer_banded(const Image<float>& depth, const CameraInfo& camera, const Pose& bin_to_cam);
   // RidgeFit::seen_through of a fit ridge_icp has just returned (its model ridge is still in wk.icp).
   float seen_through(const RidgeFit& f, const Worker& wk) const {

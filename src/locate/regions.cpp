@@ -163,7 +163,6 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
     int* cells = &rb->region_cells[region_pool];
     int count = 0;
     Eigen::Vector3f centroid = Eigen::Vector3f::Zero();
-    float extent = 0;
     bool found = false;
     for (int pass = 0; pass < 2 && !found; ++pass) {
       const int reach_limit = pass == 0 ? reach_max : std::numeric_limits<int>::max() - 1;
@@ -223,7 +222,6 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
       if (ring_cells == 0 || float(ring_lower) < float(cfg.convexity_min_share) * float(ring_cells)) break;
       // 3. Keep regions longer than a * L.
       found = box.longer_than(float(cfg.region_min_extent_of_l) * l, zb, cells, count);
-      if (found) extent = longest_distance(zb, cells, count);
     }
     if (!found) continue;
     CandidateRegion r;
@@ -233,7 +231,6 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
     r.cells_end = region_pool + count;
     r.core_centroid = centroid;
     r.core_area_mm2 = cores[c].area;
-    r.extent_mm = extent;
     rb->candidates.push_back(r);
     for (int k = 0; k < count; ++k) rb->claim.pixels[cells[k]] = claim;
     region_pool += rb->max_region_cells;

@@ -15,15 +15,14 @@ struct CandidateRegion {
   int cells_begin = 0, cells_end = 0;  // grown region in RegionBuffers::region_cells
   Eigen::Vector3f core_centroid = Eigen::Vector3f::Zero();
   float core_area_mm2 = 0;
-  float extent_mm = 0;  // l_max of the grown region
 };
 
 // Fixed-size working memory, sized once for a Z-buffer and a model.
 struct RegionBuffers {
   Image<std::uint8_t> unlabelled_core;  // 1: upward normal, not yet in a core (this frame)
-  Image<int> stamp;       // growth visit marks
-  Image<int> reach;       // growth: steps from the core
-  Image<int> claim;       // the frame's mark on cells of regions already taken up
+  Image<int> stamp;                     // growth visit marks
+  Image<int> reach;                     // growth: steps from the core
+  Image<int> claim;                     // the frame's mark on cells of regions already taken up
   int claim_value = 0;
   int stamp_value = 0;
   Image<float> ridge_z;                     // growth: height of the core cell each grown cell came from

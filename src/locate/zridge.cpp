@@ -41,12 +41,13 @@ int extract_zridge(const PosedPoints& pts, const Eigen::Vector2f& axis, float ce
   // Down-facing samples lie under the tube's top half and are never the highest of a ridge cell
   // inside a run.
   constexpr float kFacingDown = -0.2f;
+  const auto taken = [&](int k) { return !pts.normals || pts.normals[k].dot(up_in_input) > kFacingDown; };
   const int stride = std::max(1, pts.stride);
   const int max_taken = int(rb->uvz.size());
   float u0 = 1e30f, u1 = -1e30f, v0 = 1e30f, v1 = -1e30f;
   int n_taken = 0;
   for (int k = 0; k < pts.count; k += stride) {
-    if (pts.normals && pts.normals[k].dot(up_in_input) <= kFacingDown) continue;
+    if (!taken(k)) continue;
     const Eigen::Vector3f q = to_uvz * pts.points[k] + uvz_t;
     u0 = std::min(u0, q.x()), u1 = std::max(u1, q.x()), v0 = std::min(v0, q.y()), v1 = std::max(v1, q.y());
     if (n_taken < max_taken) rb->uvz[std::size_t(n_taken)] = q, rb->index[std::size_t(n_taken)] = k;
@@ -75,8 +76,7 @@ int extract_zridge(const PosedPoints& pts, const Eigen::Vector2f& axis, float ce
     for (int k = 0; k < n_taken; ++k) bin(rb->uvz[std::size_t(k)], rb->index[std::size_t(k)]);
   } else {  // more points than the buffers were sized for: projected again, none dropped
     for (int k = 0; k < pts.count; k += stride)
-      if (!pts.normals || pts.normals[k].dot(up_in_input) > kFacingDown)
-        bin(to_uvz * pts.points[k] + uvz_t, k);
+      if (taken(k)) bin(to_uvz * pts.points[k] + uvz_t, k);
   }
   const auto emit = [&](std::size_t cell_index) {
     return Eigen::Vector3f(r * pts.points[rb->top_i[cell_index]] + t);

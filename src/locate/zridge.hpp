@@ -9,12 +9,12 @@
 namespace pipeloc {
 
 struct RidgeBuffers {
-  int cols = 0, rows = 0;              // capacity of the axis-aligned grid
-  std::vector<float> top_z;            // per cell: highest z; -inf (empty) between calls
-  std::vector<int> top_i;              // per cell: the index of that point
-  std::vector<int> row_lo, row_hi;     // per row: first and last occupied column of this call
-  std::vector<Eigen::Vector3f> uvz;    // per point taken: along and across the axis, and height
-  std::vector<int> index;              // per point taken: its index in the input
+  int cols = 0, rows = 0;            // capacity of the axis-aligned grid
+  std::vector<float> top_z;          // per cell: highest z; -inf (empty) between calls
+  std::vector<int> top_i;            // per cell: the index of that point
+  std::vector<int> row_lo, row_hi;   // per row: first and last occupied column of this call
+  std::vector<Eigen::Vector3f> uvz;  // per point taken: along and across the axis, and height
+  std::vector<int> index;            // per point taken: its index in the input
 };
 
 void reserve_ridge(RidgeBuffers* rb, float max_extent_mm, float cell_mm, int max_points = 0);
