@@ -154,17 +154,9 @@ void add_eval_bop(CLI::App& app) {
     int images = 0, rows = 0;
     double total_ms = 0;
     for (const auto& t : targets) {
-      if (!cameras.count(t.scene_id))
-        cameras[t.scene_id] = read_scene_camera(scene_dir(opt->dataset, t.scene_id) + "/scene_camera.json");
-      const auto cam_it = cameras[t.scene_id].find(t.im_id);
-      if (cam_it == cameras[t.scene_id].end())
-        throw IoError("scene " + std::to_string(t.scene_id) + ": no camera for image " +
-                      std::to_string(t.im_id));
-      const Image<float> depth =
-          read_depth_mm(depth_path(opt->dataset, t.scene_id, t.im_id), cam_it->second.depth_scale);
-      CameraInfo cam = cam_it->second;
-      cam.intrinsics.width = depth.width;
-      cam.intrinsics.height = depth.height;
+      const TargetFrame frame = read_target_frame(opt->dataset, t, &cameras);
+      const Image<float>& depth = frame.depth_mm;
+      const CameraInfo& cam = frame.camera;
       if (!locators.count(t.obj_id)) {
         models[t.obj_id] = std::make_unique<PipeModel>(load_pipe_model(model_path(opt->dataset, t.obj_id)));
         locators[t.obj_id] = std::make_unique<Locator>(*models[t.obj_id], cfg, cam.intrinsics);

@@ -188,6 +188,21 @@ Image<float> read_depth_mm(const std::string& png_path, double depth_scale) {
   return depth;
 }
 
+TargetFrame read_target_frame(const std::string& dataset, const Target& t,
+                              std::map<int, std::map<int, CameraInfo>>* cameras) {
+  if (!cameras->count(t.scene_id))
+    (*cameras)[t.scene_id] = read_scene_camera(scene_dir(dataset, t.scene_id) + "/scene_camera.json");
+  const auto& scene = (*cameras)[t.scene_id];
+  const auto cam = scene.find(t.im_id);
+  if (cam == scene.end())
+    throw IoError("scene " + std::to_string(t.scene_id) + ": no camera for image " + std::to_string(t.im_id));
+  TargetFrame frame{cam->second,
+                    read_depth_mm(depth_path(dataset, t.scene_id, t.im_id), cam->second.depth_scale)};
+  frame.camera.intrinsics.width = frame.depth_mm.width;
+  frame.camera.intrinsics.height = frame.depth_mm.height;
+  return frame;
+}
+
 Json camera_to_json(const CameraInfo& cam) {
   const auto& k = cam.intrinsics;
   Json j = {{"cam_K", {k.fx, 0.0, k.cx, 0.0, k.fy, k.cy, 0.0, 0.0, 1.0}},

@@ -47,6 +47,15 @@ std::map<int, ModelInfo> read_models_info(const std::string& path);
 // Depth in mm (float) from a 16-bit PNG and its depth_scale; 0 = no reading.
 Image<float> read_depth_mm(const std::string& png_path, double depth_scale);
 
+// One target's depth image and camera (intrinsics sized to the image). Each scene's camera file
+// is read once into `cameras`; a missing camera entry is an IoError naming scene and image.
+struct TargetFrame {
+  CameraInfo camera;
+  Image<float> depth_mm;
+};
+TargetFrame read_target_frame(const std::string& dataset, const Target& target,
+                              std::map<int, std::map<int, CameraInfo>>* cameras);
+
 Json camera_to_json(const CameraInfo& cam);
 Json pose_to_gt_json(int obj_id, const Pose& model_to_cam);
 Json gt_info_to_json(const GtInfo& info);
