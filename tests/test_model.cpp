@@ -86,6 +86,41 @@ TEST(PipeModel, SymmetricUWithEqualLegsIsFound) {
   EXPECT_GE(m.symmetries.size(), 1u);  // the half-turn about the U's axis of symmetry
 }
 
+// A pipe whose half-turn swaps its ends and lands its surface on itself within D/4 (but not within
+// the symmetry tolerance) has a near symmetry; a pipe with an exact symmetry or none has none.
+TEST(PipeModel, NearSymmetriesAreHalfTurnsMappingMostOfTheSurfaceOntoItself) {
+  PipeSpec coil_spec;
+  coil_spec.diameter_mm = 16;
+  coil_spec.segments = parse_centreline("S30,B120r45t90,B90r45,S30");
+  const PipeModel coil = derive_pipe_model(make_pipe(coil_spec), "coil");
+  EXPECT_TRUE(coil.symmetries.empty());
+  ASSERT_EQ(coil.near_symmetries.size(), 1u);
+  const Pose& t = coil.near_symmetries[0];
+  EXPECT_NEAR(rotation_angle_deg(Eigen::Matrix3d::Identity(), t.linear()), 180.0, 2.0);
+  KdTree3 tree;
+  tree.build(coil.surface.points.data(), coil.surface.points.size());
+  int within = 0, moved_far = 0, n = 0;
+  for (std::size_t i = 0; i < coil.surface.points.size(); i += 5, ++n) {
+    const Eigen::Vector3f& p = coil.surface.points[i];
+    const Eigen::Vector3f q = t.cast<float>() * p;
+    int idx;
+    float d2;
+    ASSERT_TRUE(tree.nearest(q, &idx, &d2));
+    within += std::sqrt(d2) <= 0.25f * coil.tube_diameter_mm;
+    moved_far += (q - p).norm() > 2 * coil.tube_diameter_mm;  // the ends are swapped, not left in place
+  }
+  EXPECT_GE(within, 0.6 * n);
+  EXPECT_GT(moved_far, n / 4);
+
+  const PipeModel torus = derive_pipe_model(make_pipe(pipe_preset("torus")), "torus");
+  EXPECT_EQ(torus.symmetries.size(), 1u);
+  EXPECT_TRUE(torus.near_symmetries.empty());  // its half-turn is a symmetry, not listed twice
+  PipeSpec hook_spec;
+  hook_spec.diameter_mm = 14;
+  hook_spec.segments = parse_centreline("S120,B160r35,S20");
+  EXPECT_TRUE(derive_pipe_model(make_pipe(hook_spec), "hook").near_symmetries.empty());
+}
+
 TEST(PipeModel, ModelFrameNeedNotBeCentred) {
   PipeSpec spec = pipe_preset("sbend");
   spec.model_frame.translation() = Eigen::Vector3d(300, -200, 50);

@@ -46,9 +46,11 @@ void add_make_pipe(CLI::App& app) {
     const Mesh mesh = make_pipe(spec);
     write_stl(opt->out, mesh, opt->ascii ? StlFormat::ascii : StlFormat::binary);
     const PipeModel model = derive_pipe_model(mesh, opt->out);
-    spdlog::info("wrote {}: {} triangles, tube diameter {:.2f} mm, longest extent L {:.1f} mm, {} symmetries",
-                 opt->out, mesh.faces.size(), model.tube_diameter_mm, model.extent_mm,
-                 model.symmetries.size());
+    spdlog::info(
+        "wrote {}: {} triangles, tube diameter {:.2f} mm, longest extent L {:.1f} mm, {} symmetries, {} near "
+        "symmetries",
+        opt->out, mesh.faces.size(), model.tube_diameter_mm, model.extent_mm, model.symmetries.size(),
+        model.near_symmetries.size());
   });
 }
 

@@ -59,8 +59,12 @@ int serve(const Options& opt) {
   for (const auto& line : describe_config(cfg)) spdlog::info("config: {}", line);
   // configure
   const PipeModel model = load_config_model(cfg);
-  spdlog::info("model: {}: tube diameter {:.2f} mm, longest extent L {:.1f} mm, {} symmetries", model.source,
-               model.tube_diameter_mm, model.extent_mm, model.symmetries.size());
+  spdlog::info(
+      "model: {}: tube diameter {:.2f} mm, longest extent L {:.1f} mm, {} symmetries, {} near symmetries "
+      "(half-turns checked "
+      "as ambiguities)",
+      model.source, model.tube_diameter_mm, model.extent_mm, model.symmetries.size(),
+      model.near_symmetries.size());
   std::unique_ptr<FrameSource> source = open_frame_source(cfg, model);
   spdlog::info("source: {}", source->describe());
   Service service(cfg, model, std::move(source));

@@ -405,28 +405,20 @@ void Locator::work_candidate(int c, Worker& wk, const Image<float>& depth, const
   PipeEstimate best, second;
   bool have_best = false, have_second = false;
   auto quality = [](const Verification& v) { return v.agreement() - 2 * v.free_space(); };
-  int tried = 0;
-  for (std::size_t i = 0; i < wk.fits.size() && tried < cfg_.verify_hypotheses; ++i) {
-    if (wk.fits[i].cost_mm > r_th) continue;
-    bool seen = false;
-    for (std::size_t j = 0; j < i && !seen; ++j)
-      seen = wk.fits[j].cost_mm <= r_th &&
-             pose_distance_mm(lm_, wk.fits[i].pose, wk.fits[j].pose) < float(cfg_.ambiguity_pose_mm);
-    if (seen) continue;
-    if (out_of_time(deadline)) return;  // an unchecked runner-up could hide an ambiguity
-    ++tried;
-    t = Clock::now();
-    const RefineResult refined =
-        refine_on_surface(lm_, wk.fits[i].pose, wk.region_pts.data(), refine_count, cfg_);
-    wk.times.refine_ms += ms_since(t);
-    t = Clock::now();
+  // Refines a hypothesis on the region, has the image judge it, and keeps the best two that are
+  // more than ambiguity_pose_mm apart.
+  const auto judge = [&](const Pose& start, float ridge_cost_mm) {
+    auto t0 = Clock::now();
+    const RefineResult refined = refine_on_surface(lm_, start, wk.region_pts.data(), refine_count, cfg_);
+    wk.times.refine_ms += ms_since(t0);
+    t0 = Clock::now();
     PipeEstimate e;
     e.model_to_bin = refined.pose;
     e.model_to_cam = bin_to_cam * refined.pose;
     e.check = verify_pose(lm_.verify_mesh, lm_.verify_winding, e.model_to_cam, depth, camera.intrinsics,
                           float(cfg_.verify_tolerance_mm), &wk.scratch_depth, &wk.scratch_mesh);
-    wk.times.verify_ms += ms_since(t);
-    e.ridge_cost_mm = wk.fits[i].cost_mm;
+    wk.times.verify_ms += ms_since(t0);
+    e.ridge_cost_mm = ridge_cost_mm;
     e.ridge_points = trace.ridge_count;
     e.refine_inliers = refined.inliers;
     e.refine_points = refine_count;
@@ -441,7 +433,29 @@ void Locator::work_candidate(int c, Worker& wk, const Image<float>& depth, const
       if (pose_distance_mm(lm_, best.model_to_bin, e.model_to_bin) > float(cfg_.ambiguity_pose_mm))
         second = e, have_second = true;
     }
+  };
+  int tried = 0;
+  for (std::size_t i = 0; i < wk.fits.size() && tried < cfg_.verify_hypotheses; ++i) {
+    if (wk.fits[i].cost_mm > r_th) continue;
+    bool seen = false;
+    for (std::size_t j = 0; j < i && !seen; ++j)
+      seen = wk.fits[j].cost_mm <= r_th &&
+             pose_distance_mm(lm_, wk.fits[i].pose, wk.fits[j].pose) < float(cfg_.ambiguity_pose_mm);
+    if (seen) continue;
+    if (out_of_time(deadline)) return;  // an unchecked runner-up could hide an ambiguity
+    ++tried;
+    judge(wk.fits[i].pose, wk.fits[i].cost_mm);
   }
+  // Beyond the paper: a near-symmetric part (a half-turn maps most of it onto itself) seen only
+  // where the two poses agree fits both equally; the ridge ICP need not have reached the other.
+  // The twin of the best hypothesis is judged too, so that the ambiguity is found, or the twin
+  // taken when the image prefers it.
+  if (have_best)
+    for (const Pose& half_turn : model_.near_symmetries) {
+      if (out_of_time(deadline)) return;
+      const PipeEstimate found = best;
+      judge(found.model_to_bin * half_turn, found.ridge_cost_mm);
+    }
   PipeEstimate& e = best;
   trace.check = e.check;
   trace.refined_to_cam = e.model_to_cam;
@@ -450,9 +464,10 @@ void Locator::work_candidate(int c, Worker& wk, const Image<float>& depth, const
     trace.outcome = CandidateOutcome::not_confirmed;
     return;
   }
-  const bool ambiguous = have_second && second.check.agreement() >= float(cfg_.verify_min_agreement) &&
-                         second.check.free_space() <= float(cfg_.verify_max_free_space) &&
-                         quality(second.check) >= quality(best.check) - float(cfg_.ambiguity_quality_margin);
+  // A rival the image judges about as well makes the pipe ambiguous, whether or not it passes the
+  // thresholds itself: the best passing them by a hair and a rival failing them by one are the same.
+  const bool ambiguous =
+      have_second && quality(second.check) >= quality(best.check) - float(cfg_.ambiguity_quality_margin);
   e.ambiguous = ambiguous;
   e.score = e.check.agreement() * (1.0f - e.check.occluded()) * (ambiguous ? 0.5f : 1.0f);
   e.pickable = !ambiguous && e.check.occluded() <= float(cfg_.verify_max_occluded);

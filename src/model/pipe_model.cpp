@@ -155,6 +155,69 @@ std::vector<Pose> find_symmetries(const SurfaceSamples& surface, const Eigen::Ve
   return found;
 }
 
+std::vector<Pose> find_near_symmetries(const SurfaceSamples& surface, const Eigen::Vector3f& centroid,
+                                       float tolerance_mm, float min_share, const std::vector<Pose>& exclude,
+                                       float exclude_mm) {
+  std::vector<Pose> found;
+  if (surface.points.size() < 10) return found;
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (const auto& p : surface.points) {
+    const Eigen::Vector3d d = (p - centroid).cast<double>();
+    cov += d * d.transpose();
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov / double(surface.points.size()));
+  KdTree3 tree;
+  tree.build(surface.points.data(), surface.points.size());
+  const std::size_t stride = std::max<std::size_t>(1, surface.points.size() / 2000);
+  const std::size_t n = (surface.points.size() + stride - 1) / stride;
+  // Largest displacement of a sample between two transforms.
+  const auto displacement = [&](const Pose& a, const Pose& b) {
+    float worst = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      const Eigen::Vector3d p = surface.points[i * stride].cast<double>();
+      worst = std::max(worst, float((a * p - b * p).norm()));
+    }
+    return worst;
+  };
+  for (int axis = 0; axis < 3; ++axis) {
+    const Eigen::Vector3d a = eig.eigenvectors().col(axis);
+    Pose m = Pose::Identity();
+    m.linear() = Eigen::AngleAxisd(M_PI, a).toRotationMatrix();
+    m.translation() = centroid.cast<double>() - m.linear() * centroid.cast<double>();
+    // Refined on the part it maps onto itself: pairs are gated, from a tube diameter's worth of
+    // distance (4 tolerances) down to the tolerance, so the parts that differ do not pull.
+    float share = 0;
+    for (int iter = 0; iter < 12; ++iter) {
+      const float gate = tolerance_mm * std::max(1.0f, 4.0f - float(iter) / 2);
+      Eigen::Matrix3Xd src(3, Eigen::Index(n)), dst(3, Eigen::Index(n));
+      Eigen::Index pairs = 0;
+      int within = 0;
+      for (std::size_t i = 0; i < n; ++i) {
+        const Eigen::Vector3f& p = surface.points[i * stride];
+        const Eigen::Vector3f q = (m * p.cast<double>()).cast<float>();
+        int idx = 0;
+        float d2 = 0;
+        tree.nearest(q, &idx, &d2, 64);
+        within += d2 <= tolerance_mm * tolerance_mm;
+        if (d2 > gate * gate) continue;
+        src.col(pairs) = p.cast<double>();
+        dst.col(pairs) = surface.points[std::size_t(idx)].cast<double>();
+        ++pairs;
+      }
+      share = float(within) / float(n);
+      if (pairs < 10) break;
+      m.matrix() = Eigen::umeyama(src.leftCols(pairs), dst.leftCols(pairs), false);
+      m.linear() = nearest_rotation(m.linear());
+    }
+    if (share < min_share || rotation_angle_deg(Eigen::Matrix3d::Identity(), m.linear()) <= 90) continue;
+    bool known = false;
+    for (const Pose& e : exclude) known = known || displacement(e, m) <= exclude_mm;
+    for (const Pose& e : found) known = known || displacement(e, m) <= exclude_mm;
+    if (!known) found.push_back(m);
+  }
+  return found;
+}
+
 void orient_outward(Mesh* mesh) {
   // Exporters disagree on winding; a closed surface wound outward encloses positive volume.
   double volume6 = 0;
@@ -185,6 +248,9 @@ PipeModel derive_pipe_model(Mesh mesh, const std::string& source, const ModelDer
     throw ModelError("model '" + source + "': cannot measure a tube diameter (is it a closed tube?)");
   model.symmetry_tolerance_mm = params.symmetry_tolerance_of_diameter * model.tube_diameter_mm;
   model.symmetries = find_symmetries(model.surface, model.centroid, model.symmetry_tolerance_mm);
+  model.near_symmetries = find_near_symmetries(
+      model.surface, model.centroid, params.near_symmetry_tolerance_of_diameter * model.tube_diameter_mm,
+      params.near_symmetry_min_share, model.symmetries, model.tube_diameter_mm);
   return model;
 }
 

@@ -25,6 +25,9 @@ struct PipeModel {
   Eigen::Vector3f centroid = Eigen::Vector3f::Zero();  // of the surface
   std::vector<Pose> symmetries;  // proper rotations other than identity mapping the surface onto itself
   float symmetry_tolerance_mm = 0;
+  // Half-turns that map most of the surface onto itself but not all of it (the ends of a pipe
+  // swapped): a view of the part that shows only the common surface fits both poses.
+  std::vector<Pose> near_symmetries;
 };
 
 struct ModelDerivation {
@@ -34,6 +37,10 @@ struct ModelDerivation {
   // A candidate rotation is a symmetry when no surface sample lands further than this from the
   // surface; as a share of the tube diameter (so it scales with the part).
   float symmetry_tolerance_of_diameter = 0.08f;
+  // A half-turn is a near symmetry when at least this share of the surface lands within
+  // near_symmetry_tolerance_of_diameter * D of the surface (and it is no symmetry).
+  float near_symmetry_min_share = 0.6f;
+  float near_symmetry_tolerance_of_diameter = 0.25f;
 };
 
 PipeModel derive_pipe_model(Mesh mesh, const std::string& source, const ModelDerivation& = {});
@@ -51,5 +58,11 @@ float measure_tube_diameter(const Mesh& mesh, const std::vector<Eigen::Vector3f>
 float longest_extent(const std::vector<Eigen::Vector3f>& vertices);
 std::vector<Pose> find_symmetries(const SurfaceSamples& surface, const Eigen::Vector3f& centroid,
                                   float tolerance_mm);
+// The half-turns about the principal axes, each refined on the surface it maps onto itself, that
+// bring at least min_share of the samples within tolerance_mm of the surface; those within
+// `exclude_mm` (largest sample displacement) of one of `exclude` are left out.
+std::vector<Pose> find_near_symmetries(const SurfaceSamples& surface, const Eigen::Vector3f& centroid,
+                                       float tolerance_mm, float min_share, const std::vector<Pose>& exclude,
+                                       float exclude_mm);
 
 }  // namespace pipeloc
