@@ -449,12 +449,15 @@ void Locator::work_candidate(int c, Worker& wk, const Image<float>& depth, const
   // Beyond the paper: a near-symmetric part (a half-turn maps most of it onto itself) seen only
   // where the two poses agree fits both equally; the ridge ICP need not have reached the other.
   // The twin of the best hypothesis is judged too, so that the ambiguity is found, or the twin
-  // taken when the image prefers it.
+  // taken when the image prefers it. A twin the runner-up already stands for is not judged again.
   if (have_best)
     for (const Pose& half_turn : model_.near_symmetries) {
+      const Pose twin = best.model_to_bin * half_turn;
+      if (have_second &&
+          pose_distance_mm(lm_, twin, second.model_to_bin) <= float(cfg_.ambiguity_pose_mm))
+        continue;
       if (out_of_time(deadline)) return;
-      const PipeEstimate found = best;
-      judge(found.model_to_bin * half_turn, found.ridge_cost_mm);
+      judge(twin, best.ridge_cost_mm);
     }
   PipeEstimate& e = best;
   trace.check = e.check;
