@@ -1,0 +1,29 @@
+#!/usr/bin/env bash
+# The offline tools on a dataset the project makes itself: simulate -> eval-bop -> score, and
+# bench --dataset on the same frames; a missing dataset is refused with a message naming it.
+set -euo pipefail
+bin="$1"
+work="$(mktemp -d)"
+trap 'rm -rf "$work"' EXIT
+fail() { echo "FAIL: $*" >&2; exit 1; }
+
+"$bin" make-pipe --preset u --out "$work/u.stl" > /dev/null 2>&1
+"$bin" simulate --model "$work/u.stl" --images 2 --pipes 8 --seed 3 --out "$work/ds" > /dev/null 2>&1
+
+"$bin" eval-bop --dataset "$work/ds" --out "$work/r.csv" > /dev/null 2>&1
+rows=$(($(wc -l < "$work/r.csv") - 1))
+[ "$rows" -ge 2 ] || fail "eval-bop wrote $rows result rows for 2 images of 8 pipes"
+"$bin" score --dataset "$work/ds" --results "$work/r.csv" > "$work/score.txt"
+grep -qE '^all +2 ' "$work/score.txt" || fail "score has no 'all' row over 2 images: $(cat "$work/score.txt")"
+
+"$bin" bench --dataset "$work/ds" --rounds 2 > "$work/bench.txt" 2>&1
+grep -q '2 rounds over the 2 target frames' "$work/bench.txt" || fail "bench header: $(head -1 "$work/bench.txt")"
+for stage in cycle zbuffer normals regions 'ridge_icp\*' 'refine\*' 'verify\*'; do
+  grep -qE "^${stage} +[0-9.]+ +[0-9.]+ +[0-9.]+$" "$work/bench.txt" || fail "bench prints no median/p95/max for $stage"
+done
+# Every cycle found something on a simulated bin: its median is a positive time.
+awk '$1 == "cycle" && $2 > 0 { ok = 1 } END { exit !ok }' "$work/bench.txt" || fail "bench cycle median not positive"
+
+if "$bin" bench --dataset "$work/nowhere" > "$work/err.txt" 2>&1; then fail "bench on a missing dataset exited 0"; fi
+grep -q "nowhere" "$work/err.txt" || fail "the error does not name the dataset: $(cat "$work/err.txt")"
+echo "1 passed, 0 failed"
