@@ -168,7 +168,7 @@ std::vector<Pose> find_near_symmetries(const SurfaceSamples& surface, const Eige
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov / double(surface.points.size()));
   KdTree3 tree;
   tree.build(surface.points.data(), surface.points.size());
-  const std::size_t stride = std::max<std::size_t>(1, surface.points.size() / 2000);
+  const std::size_t stride = std::max<std::size_t>(1, surface.points.size() / 1000);
   const std::size_t n = (surface.points.size() + stride - 1) / stride;
   // Largest displacement of a sample between two transforms.
   const auto displacement = [&](const Pose& a, const Pose& b) {
@@ -187,8 +187,8 @@ std::vector<Pose> find_near_symmetries(const SurfaceSamples& surface, const Eige
     // Refined on the part it maps onto itself: pairs are gated, from a tube diameter's worth of
     // distance (4 tolerances) down to the tolerance, so the parts that differ do not pull.
     float share = 0;
-    for (int iter = 0; iter < 12; ++iter) {
-      const float gate = tolerance_mm * std::max(1.0f, 4.0f - float(iter) / 2);
+    for (int iter = 0; iter < 8; ++iter) {
+      const float gate = tolerance_mm * std::max(1.0f, 4.0f - float(iter));
       Eigen::Matrix3Xd src(3, Eigen::Index(n)), dst(3, Eigen::Index(n));
       Eigen::Index pairs = 0;
       int within = 0;
