@@ -69,15 +69,10 @@ LocatorModel prepare_locator_model(const PipeModel& model, float margin_mm, cons
   lm.extent_l_mm = model.extent_mm;
   lm.centroid = model.centroid;
   const auto& pts = model.surface.points;
-  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-  for (const auto& p : pts) {
-    const Eigen::Vector3d d = (p - model.centroid).cast<double>();
-    cov += d * d.transpose();
-  }
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
-  lm.axis = eig.eigenvectors().col(2).cast<float>();
-  lm.up = eig.eigenvectors().col(0).cast<float>();
-  const Eigen::Vector3f side = eig.eigenvectors().col(1).cast<float>();
+  const Eigen::Matrix3d axes = principal_axes(pts, model.centroid);
+  lm.axis = axes.col(2).cast<float>();
+  lm.up = axes.col(0).cast<float>();
+  const Eigen::Vector3f side = axes.col(1).cast<float>();
   float side_lo = 1e30f, side_hi = -1e30f;
   for (const auto& p : pts)
     side_lo = std::min(side_lo, p.dot(side)), side_hi = std::max(side_hi, p.dot(side));

@@ -100,18 +100,36 @@ float longest_extent(const std::vector<Eigen::Vector3f>& v) {
   return std::sqrt(best);
 }
 
+Eigen::Matrix3d principal_axes(const std::vector<Eigen::Vector3f>& points, const Eigen::Vector3f& centroid) {
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (const auto& p : points) {
+    const Eigen::Vector3d d = (p - centroid).cast<double>();
+    cov += d * d.transpose();
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov /
+                                                           double(std::max<std::size_t>(1, points.size())));
+  return eig.eigenvectors();
+}
+
+namespace {
+
+// The half-turn about the line through `centre` along `axis`.
+Pose half_turn(const Eigen::Vector3d& axis, const Eigen::Vector3f& centre) {
+  Pose m = Pose::Identity();
+  m.linear() = Eigen::AngleAxisd(M_PI, axis).toRotationMatrix();
+  m.translation() = centre.cast<double>() - m.linear() * centre.cast<double>();
+  return m;
+}
+
+}  // namespace
+
 std::vector<Pose> find_symmetries(const SurfaceSamples& surface, const Eigen::Vector3f& centroid,
                                   float tolerance_mm) {
   // A rigid symmetry fixes the surface centroid and maps principal axes onto principal axes; with
   // distinct principal moments the only proper candidates are half-turns about each axis.
   std::vector<Pose> found;
   if (surface.points.size() < 10) return found;
-  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-  for (const auto& p : surface.points) {
-    const Eigen::Vector3d d = (p - centroid).cast<double>();
-    cov += d * d.transpose();
-  }
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov / double(surface.points.size()));
+  const Eigen::Matrix3d axes = principal_axes(surface.points, centroid);
   KdTree3 tree;
   tree.build(surface.points.data(), surface.points.size());
   // Sampling noise tilts the principal axes by a degree or so: refine each candidate with a few
@@ -119,12 +137,7 @@ std::vector<Pose> find_symmetries(const SurfaceSamples& surface, const Eigen::Ve
   const std::size_t stride = std::max<std::size_t>(1, surface.points.size() / 3000);
   Eigen::Matrix3Xd src(3, (surface.points.size() + stride - 1) / stride), dst(3, src.cols());
   for (int axis = 0; axis < 3; ++axis) {
-    const Eigen::Vector3d a = eig.eigenvectors().col(axis);
-    Eigen::Matrix4f m = Eigen::Matrix4f::Identity();
-    Pose half_turn = Pose::Identity();
-    half_turn.linear() = Eigen::AngleAxisd(M_PI, a).toRotationMatrix();
-    half_turn.translation() = centroid.cast<double>() - half_turn.linear() * centroid.cast<double>();
-    m = half_turn.matrix().cast<float>();
+    Eigen::Matrix4f m = half_turn(axes.col(axis), centroid).matrix().cast<float>();
     bool fits = true;
     for (int iter = 0; iter <= 5 && fits; ++iter) {
       float worst_plane = 0;
@@ -160,12 +173,7 @@ std::vector<Pose> find_near_symmetries(const SurfaceSamples& surface, const Eige
                                        float exclude_mm) {
   std::vector<Pose> found;
   if (surface.points.size() < 10) return found;
-  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-  for (const auto& p : surface.points) {
-    const Eigen::Vector3d d = (p - centroid).cast<double>();
-    cov += d * d.transpose();
-  }
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov / double(surface.points.size()));
+  const Eigen::Matrix3d axes = principal_axes(surface.points, centroid);
   KdTree3 tree;
   tree.build(surface.points.data(), surface.points.size());
   const std::size_t stride = std::max<std::size_t>(1, surface.points.size() / 1000);
@@ -180,10 +188,7 @@ std::vector<Pose> find_near_symmetries(const SurfaceSamples& surface, const Eige
     return worst;
   };
   for (int axis = 0; axis < 3; ++axis) {
-    const Eigen::Vector3d a = eig.eigenvectors().col(axis);
-    Pose m = Pose::Identity();
-    m.linear() = Eigen::AngleAxisd(M_PI, a).toRotationMatrix();
-    m.translation() = centroid.cast<double>() - m.linear() * centroid.cast<double>();
+    Pose m = half_turn(axes.col(axis), centroid);
     // Refined on the part it maps onto itself: pairs are gated, from a tube diameter's worth of
     // distance (4 tolerances) down to the tolerance, so the parts that differ do not pull.
     float share = 0;

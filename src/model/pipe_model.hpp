@@ -56,6 +56,8 @@ void orient_outward(Mesh* mesh);
 // Median distance from a vertex straight through the tube to the opposite wall.
 float measure_tube_diameter(const Mesh& mesh, const std::vector<Eigen::Vector3f>& vertex_normals);
 float longest_extent(const std::vector<Eigen::Vector3f>& vertices);
+// Principal axes of a point set about `centroid`: the columns, by increasing spread.
+Eigen::Matrix3d principal_axes(const std::vector<Eigen::Vector3f>& points, const Eigen::Vector3f& centroid);
 std::vector<Pose> find_symmetries(const SurfaceSamples& surface, const Eigen::Vector3f& centroid,
                                   float tolerance_mm);
 // The half-turns about the principal axes, each refined on the surface it maps onto itself, that
