@@ -450,15 +450,17 @@ void Locator::work_candidate(int c, Worker& wk, const Image<float>& depth, const
   // where the two poses agree fits both equally; the ridge ICP need not have reached the other.
   // The twin of the best hypothesis is judged too, so that the ambiguity is found, or the twin
   // taken when the image prefers it. A twin the runner-up already stands for is not judged again.
-  if (have_best)
+  if (have_best) {
+    const Pose found = best.model_to_bin;  // judging a twin may replace the best: twins of this one
+    const float found_cost_mm = best.ridge_cost_mm;
     for (const Pose& half_turn : model_.near_symmetries) {
-      const Pose twin = best.model_to_bin * half_turn;
-      if (have_second &&
-          pose_distance_mm(lm_, twin, second.model_to_bin) <= float(cfg_.ambiguity_pose_mm))
+      const Pose twin = found * half_turn;
+      if (have_second && pose_distance_mm(lm_, twin, second.model_to_bin) <= float(cfg_.ambiguity_pose_mm))
         continue;
       if (out_of_time(deadline)) return;
-      judge(twin, best.ridge_cost_mm);
+      judge(twin, found_cost_mm);
     }
+  }
   PipeEstimate& e = best;
   trace.check = e.check;
   trace.refined_to_cam = e.model_to_cam;
