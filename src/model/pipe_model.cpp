@@ -121,6 +121,17 @@ Pose half_turn(const Eigen::Vector3d& axis, const Eigen::Vector3f& centre) {
   return m;
 }
 
+// What both half-turn searches start from: the surface's principal axes (the half-turns are
+// about them) and its samples indexed for closest points.
+struct IndexedSurface {
+  Eigen::Matrix3d axes;
+  KdTree3 tree;
+  IndexedSurface(const SurfaceSamples& surface, const Eigen::Vector3f& centroid)
+      : axes(principal_axes(surface.points, centroid)) {
+    tree.build(surface.points.data(), surface.points.size());
+  }
+};
+
 }  // namespace
 
 std::vector<Pose> find_symmetries(const SurfaceSamples& surface, const Eigen::Vector3f& centroid,
@@ -129,15 +140,13 @@ std::vector<Pose> find_symmetries(const SurfaceSamples& surface, const Eigen::Ve
   // distinct principal moments the only proper candidates are half-turns about each axis.
   std::vector<Pose> found;
   if (surface.points.size() < 10) return found;
-  const Eigen::Matrix3d axes = principal_axes(surface.points, centroid);
-  KdTree3 tree;
-  tree.build(surface.points.data(), surface.points.size());
+  const IndexedSurface indexed(surface, centroid);
   // Sampling noise tilts the principal axes by a degree or so: refine each candidate with a few
   // closest-point iterations (Umeyama fit) before judging it.
   const std::size_t stride = std::max<std::size_t>(1, surface.points.size() / 3000);
   Eigen::Matrix3Xd src(3, (surface.points.size() + stride - 1) / stride), dst(3, src.cols());
   for (int axis = 0; axis < 3; ++axis) {
-    Eigen::Matrix4f m = half_turn(axes.col(axis), centroid).matrix().cast<float>();
+    Eigen::Matrix4f m = half_turn(indexed.axes.col(axis), centroid).matrix().cast<float>();
     bool fits = true;
     for (int iter = 0; iter <= 5 && fits; ++iter) {
       float worst_plane = 0;
@@ -146,7 +155,7 @@ std::vector<Pose> find_symmetries(const SurfaceSamples& surface, const Eigen::Ve
         const Eigen::Vector3f q = m.topLeftCorner<3, 3>() * p + m.topRightCorner<3, 1>();
         int idx = 0;
         float d2 = 0;
-        tree.nearest(q, &idx, &d2, 64);
+        indexed.tree.nearest(q, &idx, &d2, 64);
         src.col(c) = p.cast<double>();
         dst.col(c) = surface.points[idx].cast<double>();
         // Point-to-plane: the gap between samples is not a departure from the surface.
@@ -173,9 +182,7 @@ std::vector<Pose> find_near_symmetries(const SurfaceSamples& surface, const Eige
                                        float exclude_mm) {
   std::vector<Pose> found;
   if (surface.points.size() < 10) return found;
-  const Eigen::Matrix3d axes = principal_axes(surface.points, centroid);
-  KdTree3 tree;
-  tree.build(surface.points.data(), surface.points.size());
+  const IndexedSurface indexed(surface, centroid);
   const std::size_t stride = std::max<std::size_t>(1, surface.points.size() / 1000);
   const std::size_t n = (surface.points.size() + stride - 1) / stride;
   // Largest displacement of a sample between two transforms.
@@ -188,7 +195,7 @@ std::vector<Pose> find_near_symmetries(const SurfaceSamples& surface, const Eige
     return worst;
   };
   for (int axis = 0; axis < 3; ++axis) {
-    Pose m = half_turn(axes.col(axis), centroid);
+    Pose m = half_turn(indexed.axes.col(axis), centroid);
     // Refined on the part it maps onto itself: pairs are gated, from a tube diameter's worth of
     // distance (4 tolerances) down to the tolerance, so the parts that differ do not pull.
     float share = 0;
@@ -202,7 +209,7 @@ std::vector<Pose> find_near_symmetries(const SurfaceSamples& surface, const Eige
         const Eigen::Vector3f q = (m * p.cast<double>()).cast<float>();
         int idx = 0;
         float d2 = 0;
-        tree.nearest(q, &idx, &d2, 64);
+        indexed.tree.nearest(q, &idx, &d2, 64);
         within += d2 <= tolerance_mm * tolerance_mm;
         if (d2 > gate * gate) continue;
         src.col(pairs) = p.cast<double>();
