@@ -49,9 +49,8 @@ int model_ridge(const LocatorModel& lm, const Pose& pose, const Eigen::Vector2f&
   samples.points = lm.ridge_samples.data();
   samples.normals = lm.ridge_normals.data();
   samples.count = int(lm.ridge_samples.size());
-  // Coarser cells need proportionally fewer samples: the same few per cell.
-  const int stride = std::max(1, int(cell_mm / float(cfg.ridge_cell_mm) + 0.5f));
-  samples.stride = stride * stride;
+  samples.stride = ridge_sample_stride(cell_mm, cfg);
+  samples.columns = lm.ridge_columns_for(samples.stride);
   samples.to_bin = pose;
   return extract_zridge(samples, axis, cell_mm, 0.3f * lm.tube_d_mm, &buf->ridge, buf->model_ridge.data(),
                         int(buf->model_ridge.size()), cfg.match_surface);

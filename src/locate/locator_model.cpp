@@ -87,6 +87,13 @@ LocatorModel prepare_locator_model(const PipeModel& model, float margin_mm, cons
     lm.ridge_samples.push_back(pts[i]);
     lm.ridge_normals.push_back(model.surface.normals[i]);
   }
+  for (const float cell : {float(cfg.ridge_cell_mm), float(std::max(cfg.icp_probe_cell_mm, cfg.ridge_cell_mm))}) {
+    const int take = ridge_sample_stride(cell, cfg);
+    if (lm.ridge_columns_for(take)) continue;
+    lm.ridge_columns.emplace_back();
+    lm.ridge_columns.back().assign(lm.ridge_samples.data(), lm.ridge_normals.data(), int(lm.ridge_samples.size()),
+                                   take);
+  }
   lm.verify_mesh = weld_vertices(model.mesh, std::max(0.5f, lm.tube_d_mm / 8));
   lm.verify_winding = closed_winding(model.mesh);
   const std::size_t vstride = std::max<std::size_t>(1, model.mesh.vertices.size() / 64);
@@ -149,6 +156,11 @@ LocatorModel prepare_locator_model(const PipeModel& model, float margin_mm, cons
         model, Eigen::AngleAxisd(2 * M_PI * k / turns, Eigen::Vector3d::UnitX()).toRotationMatrix() * lying,
         cfg));
   return lm;
+}
+
+int ridge_sample_stride(float cell_mm, const LocateConfig& cfg) {
+  const int per_side = std::max(1, int(cell_mm / float(cfg.ridge_cell_mm) + 0.5f));
+  return per_side * per_side;
 }
 
 float pose_distance_mm(const LocatorModel& lm, const Pose& a, const Pose& b) {

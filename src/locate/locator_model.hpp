@@ -5,6 +5,7 @@
 
 #include <vector>
 
+#include "locate/zridge.hpp"
 #include "model/pipe_model.hpp"
 
 namespace pipeloc {
@@ -16,6 +17,13 @@ struct LocatorModel {
   Eigen::Vector3f centroid = Eigen::Vector3f::Zero();
   std::vector<Eigen::Vector3f> ridge_samples;  // subset of surface samples for the Z-ridge
   std::vector<Eigen::Vector3f> ridge_normals;  // their outward normals
+  // The same by coordinate, one set per stride a ridge cell of the config takes them with.
+  std::vector<OrientedColumns> ridge_columns;
+  const OrientedColumns* ridge_columns_for(int stride) const {
+    for (const auto& c : ridge_columns)
+      if (c.stride == stride) return &c;
+    return nullptr;
+  }
   std::vector<Eigen::Vector3f> check_points;   // vertices spread over the part, for pose distances
   // The mesh verification renders: vertices merged on a grid of D/8 (within a pixel's footprint at
   // the bin's depth, several times fewer triangles to draw per hypothesis).
@@ -55,6 +63,9 @@ struct LocatorModel {
 struct LocateConfig;
 struct AxisEstimate;
 LocatorModel prepare_locator_model(const PipeModel& model, float margin_mm, const LocateConfig& cfg);
+
+// Coarser ridge cells need proportionally fewer samples: every this-many-th, the same few per cell.
+int ridge_sample_stride(float cell_mm, const LocateConfig& cfg);
 
 // III applied to the model's ideal top view at model_to_bin (the whole silhouette, no noise).
 AxisEstimate top_view_axis(const PipeModel& model, const Pose& model_to_bin, const LocateConfig& cfg);
