@@ -202,6 +202,8 @@ SlidStart slide_start(const LocatorModel& lm, const StartSet& starts, int s, con
         const Eigen::Vector3f& p = buf->model_ridge[std::size_t(i)];
         m2o += buf->observed_top.at(p.x() + offset.x(), p.y() + offset.y());
       }
+      // The other half only adds: an offset already beyond the best (and its tie band) is done.
+      if (0.5f * (m2o / float(nm)) > best + 1e-4f) continue;
       for (int j = 0; j < n_obs; ++j) o2m += model_top.at(obs_axis[j].x() - oa, obs_axis[j].y() - ob);
       const float cost = 0.5f * (m2o / float(nm) + o2m / float(n_obs));
       // Ties go to the smaller move (the measured centres agree when the whole pipe is seen).
