@@ -403,6 +403,55 @@ TEST(Segmentation, CandidateCoresLieOnTopPipes) {
   EXPECT_GE(on_top * 10, int(rb.candidates.size()) * 7);
 }
 
+// Beyond the paper: two straight pipes lying side by side on the floor, touching, one half a
+// length along the other, seen through the sensor model. Plane fits straddling the V between them
+// give upward normals, so the paper's cores join the two tops into one core too long to be a pipe,
+// and neither is found. Split along the valley, each pipe has a core and a region of its own.
+TEST(Segmentation, TouchingPipesSideBySideGetACoreEach) {
+  PipeSpec spec;
+  spec.diameter_mm = 20;
+  spec.segments = parse_centreline("S200");
+  const PipeModel model = derive_pipe_model(make_pipe(spec), "straight");
+  const double r = 10;
+  const Eigen::Matrix3d axes = principal_axes(model.surface.points, model.centroid);
+  Eigen::Matrix3d to_world;  // the model's long axis along world X
+  to_world.row(0) = axes.col(2).transpose();
+  to_world.row(1) = axes.col(1).transpose();
+  to_world.row(2) = to_world.row(0).cross(to_world.row(1));
+  const auto lying_at = [&](double x, double y) {
+    Pose p = Pose::Identity();
+    p.linear() = to_world;
+    p.translation() = Eigen::Vector3d(x, y, r + 0.5) - to_world * model.centroid.cast<double>();
+    return p;
+  };
+  std::mt19937 rng(3);
+  SceneParams params;
+  const SimulatedScene s = render_scene(model, {lying_at(-50, -r - 0.1), lying_at(50, r + 0.1)}, params, rng);
+
+  LocateConfig paper;
+  paper.core_valley_turn = 0;  // the paper's cores
+  Locator joined(model, paper, s.camera.intrinsics);
+  joined.locate(s.depth_mm, s.camera);
+  EXPECT_EQ(joined.regions().candidates.size(), 0u) << "the two tops should have joined into a core too long";
+
+  LocateConfig cfg;
+  Locator loc(model, cfg, s.camera.intrinsics);
+  const LocateOutput& out = loc.locate(s.depth_mm, s.camera);
+  EXPECT_EQ(out.regions.split_cores, 2);
+  const auto& rb = loc.regions();
+  ASSERT_EQ(rb.candidates.size(), 2u);
+  std::vector<int> pipe_of;
+  for (const auto& cand : rb.candidates) {  // each core on one pipe
+    const std::vector<int> votes = pipe_votes(loc, model, s, &rb.core_cells[std::size_t(cand.core_begin)],
+                                              cand.core_end - cand.core_begin, 3.0f);
+    const auto best = std::max_element(votes.begin(), votes.end()) - votes.begin();
+    EXPECT_GT(votes[std::size_t(best)], (cand.core_end - cand.core_begin) * 7 / 10);
+    pipe_of.push_back(int(best));
+  }
+  EXPECT_NE(pipe_of[0], pipe_of[1]);
+  EXPECT_EQ(out.estimates.size(), 2u);
+}
+
 // Beyond the paper: growth held to about a diameter from the core keeps a region on its pipe; the
 // paper's unlimited growth runs on over touching pipes, and such a region is dropped or mixed.
 // Measured on piles: how many candidate regions, and the share of a region's cells that lie on the

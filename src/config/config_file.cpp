@@ -136,6 +136,7 @@ void read_locate(Section& s, LocateConfig* c) {
   s.real("continuity_step_max_mm", &c->continuity_step_max_mm, 0.1, 100, "mm");
   s.real("core_min_area_of_d2", &c->core_min_area_of_d2, 0, 100, "x D^2");
   s.real("core_max_extent_of_l", &c->core_max_extent_of_l, 0.1, 10, "x L");
+  s.real("core_valley_turn", &c->core_valley_turn, 0, 2, "difference of unit-normal components");
   s.real("region_min_extent_of_l", &c->region_min_extent_of_l, 0, 2, "x L");
   s.real("convexity_min_share", &c->convexity_min_share, 0, 1, "share");
   s.real("region_max_drop_of_d", &c->region_max_drop_of_d, 0.1, 5, "x D");

@@ -22,6 +22,8 @@ struct LocateConfig {
       8;  // growth: no jump between neighbours (3 sigma of the difference of two noisy cells at 1.1 m)
   double core_min_area_of_d2 = 0.75;    // A_th = this * D^2
   double core_max_extent_of_l = 1.15;   // a core longer than the pipe is not one pipe (bin rims, floor)
+  double core_valley_turn = 0.5;        // ... unless it splits where the normals D/4 either side turn
+                                        // towards each other by more (unit-normal components; 0: off)
   double region_min_extent_of_l = 0.7;  // a of the paper
   double region_max_drop_of_d = 0.8;    // grown cells lie at most this far below their core
   double region_max_reach_of_d = 1.0;   // ... and at most this far from it (steps of growth)

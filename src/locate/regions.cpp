@@ -104,40 +104,97 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
   struct Core {
     int begin, end;
     float area;
+    bool split;  // a piece of a core too long, split along valleys
   };
   int pool = 0;
   // Cores are kept in the pool in discovery order; their list is small and lives on the stack.
   constexpr int kMaxCores = 256;
   Core cores[kMaxCores];
   int n_cores = 0;
+  // The cells marked `mark` connected to (i, j), appended to the pool (and unmarked).
+  const auto label = [&](int i, int j, std::uint8_t mark) {
+    const int begin = pool;
+    CellBox box;
+    open.at(i, j) = 0;
+    rb->queue[pool] = pack(i, j);
+    rb->core_cells[pool++] = zb.index(i, j);
+    for (int head = begin; head < pool; ++head) {
+      const int ci = column_of(rb->queue[head]), cj = row_of(rb->queue[head]);
+      box.add(ci, cj, zb.z.pixels[std::size_t(rb->core_cells[head])]);
+      for (int k = 0; k < 8; ++k) {
+        const int ni = ci + kDi[k], nj = cj + kDj[k];
+        if (ni < 0 || nj < 0 || ni >= zb.width || nj >= zb.height) continue;
+        if (open.at(ni, nj) != mark) continue;
+        open.at(ni, nj) = 0;
+        rb->queue[pool] = pack(ni, nj);
+        rb->core_cells[pool++] = zb.index(ni, nj);
+      }
+    }
+    return box;
+  };
+  // A core of A_n >= A_th no longer than core_max_extent_of_l * L is kept.
+  const auto keep_core = [&](int begin, const CellBox& box) {
+    const float area = float(pool - begin) * cell_area;
+    if (area < area_min || n_cores >= kMaxCores ||
+        box.longer_than(core_extent_max, zb, &rb->core_cells[begin], pool - begin))
+      return false;
+    cores[n_cores++] = {begin, pool, area, false};
+    return true;
+  };
+  // Beyond the paper: where two pipes lie side by side touching, plane fits straddling the V
+  // between them give upward normals, and the two tops become one core, too long to be one pipe.
+  // Across a valley the normals turn towards each other (across a tube's top they turn apart);
+  // compared a quarter diameter either side, such cells are taken out of a core too long, and
+  // what falls apart is labelled again.
+  const int side = std::max(1, int(std::lround(0.25 * d / zb.pixel_mm)));
+  const float valley_turn = float(cfg.core_valley_turn);
+  const auto in_valley = [&](int i, int j) {
+    if (i < side || j < side || i + side >= zb.width || j + side >= zb.height) return false;
+    const Eigen::Vector3f &l = nm.n.at(i - side, j), &r = nm.n.at(i + side, j);
+    const Eigen::Vector3f &b = nm.n.at(i, j - side), &t = nm.n.at(i, j + side);
+    const auto none = [](const Eigen::Vector3f& n) { return n.z() == 0 && n.x() == 0 && n.y() == 0; };
+    return (!none(l) && !none(r) && l.x() - r.x() > valley_turn) ||
+           (!none(b) && !none(t) && b.y() - t.y() > valley_turn);
+  };
+  constexpr std::uint8_t kOpen = 1, kSplit = 2;
+  const int pool_capacity = int(rb->core_cells.size());
   for (int j = 0; j < zb.height; ++j) {
     for (int i = 0; i < zb.width; ++i) {
-      if (!open.at(i, j)) continue;
+      if (open.at(i, j) != kOpen) continue;
       ++stats.core_regions;
       const int begin = pool;
-      CellBox box;
-      open.at(i, j) = 0;
-      rb->queue[pool] = pack(i, j);
-      rb->core_cells[pool++] = zb.index(i, j);
-      for (int head = begin; head < pool; ++head) {
-        const int ci = column_of(rb->queue[head]), cj = row_of(rb->queue[head]);
-        box.add(ci, cj, zb.z.pixels[std::size_t(rb->core_cells[head])]);
-        for (int k = 0; k < 8; ++k) {
-          const int ni = ci + kDi[k], nj = cj + kDj[k];
-          if (ni < 0 || nj < 0 || ni >= zb.width || nj >= zb.height) continue;
-          if (!open.at(ni, nj)) continue;
-          open.at(ni, nj) = 0;
-          rb->queue[pool] = pack(ni, nj);
-          rb->core_cells[pool++] = zb.index(ni, nj);
-        }
+      const CellBox box = label(i, j, kOpen);
+      if (keep_core(begin, box)) continue;
+      const int end = pool;
+      pool = begin;  // seen, dropped ...
+      if (valley_turn <= 0 || float(end - begin) * cell_area < area_min || end + (end - begin) > pool_capacity)
+        continue;
+      // ... unless, too long, it falls apart along valleys into pieces that are cores.
+      for (int k = begin; k < end; ++k) {
+        const int ci = column_of(rb->queue[k]), cj = row_of(rb->queue[k]);
+        if (!in_valley(ci, cj)) open.at(ci, cj) = kSplit;
       }
-      const float area = float(pool - begin) * cell_area;
-      const bool keep = area >= area_min && n_cores < kMaxCores &&
-                        !box.longer_than(core_extent_max, zb, &rb->core_cells[begin], pool - begin);
-      if (keep)
-        cores[n_cores++] = {begin, pool, area};
-      else
-        pool = begin;  // seen, dropped
+      pool = end;
+      int write = begin;
+      for (int k = begin; k < end; ++k) {
+        const int ci = column_of(rb->queue[k]), cj = row_of(rb->queue[k]);
+        if (open.at(ci, cj) != kSplit) continue;
+        const int piece = pool;
+        const CellBox piece_box = label(ci, cj, kSplit);
+        if (!keep_core(piece, piece_box)) {
+          pool = piece;
+          continue;
+        }
+        // Moved down to where the whole core was (the pieces are a subset of it: no overlap).
+        Core& kept = cores[n_cores - 1];
+        std::copy(&rb->queue[kept.begin], &rb->queue[kept.end], &rb->queue[write]);
+        std::copy(&rb->core_cells[kept.begin], &rb->core_cells[kept.end], &rb->core_cells[write]);
+        kept.end = write + (kept.end - kept.begin), kept.begin = write, kept.split = true;
+        write = kept.end;
+        ++stats.split_cores;
+        pool = piece;
+      }
+      pool = write;
     }
   }
   stats.cores_kept = n_cores;
@@ -201,6 +258,8 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
           // not follow a smoothed edge down onto the floor or the pipe beneath.
           const float top = rb->ridge_z.at(ci, cj);
           if (zb.z.at(ni, nj) < top - drop_max) continue;
+          // A piece of a split core does not grow back over the valley it was split along.
+          if (cores[c].split && in_valley(ni, nj)) continue;
           rb->ridge_z.at(ni, nj) = top;
           rb->reach.at(ni, nj) = reach;
           if (count >= rb->max_region_cells) {

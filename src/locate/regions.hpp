@@ -39,6 +39,7 @@ struct RegionStats {
   int cores_kept = 0;    // after area and extent tests
   int candidates = 0;    // grown regions longer than a * L
   int claimed = 0;       // cores lying mostly in an earlier candidate region: one pipe, not grown again
+  int split_cores = 0;   // cores kept from too long ones split along valleys (touching pipes)
 };
 
 void reserve_regions(RegionBuffers* rb, const ZBuffer& zb, const LocateConfig& cfg, float tube_d_mm,
