@@ -174,25 +174,25 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
         const int ci = column_of(rb->queue[k]), cj = row_of(rb->queue[k]);
         if (!in_valley(ci, cj)) open.at(ci, cj) = kSplit;
       }
+      // The pieces are labelled after the whole core, which is read to its end for their seeds.
       pool = end;
-      int write = begin;
+      const int first_piece = n_cores;
       for (int k = begin; k < end; ++k) {
         const int ci = column_of(rb->queue[k]), cj = row_of(rb->queue[k]);
         if (open.at(ci, cj) != kSplit) continue;
         const int piece = pool;
-        const CellBox piece_box = label(ci, cj, kSplit);
-        if (!keep_core(piece, piece_box)) {
-          pool = piece;
-          continue;
-        }
-        // Moved down to where the whole core was (the pieces are a subset of it: no overlap).
-        Core& kept = cores[n_cores - 1];
+        if (!keep_core(piece, label(ci, cj, kSplit))) pool = piece;
+      }
+      // Then the pieces kept move down to where the whole core was (no overlap: they hold a
+      // subset of its cells and lie after it).
+      int write = begin;
+      for (int c = first_piece; c < n_cores; ++c) {
+        Core& kept = cores[c];
         std::copy(&rb->queue[kept.begin], &rb->queue[kept.end], &rb->queue[write]);
         std::copy(&rb->core_cells[kept.begin], &rb->core_cells[kept.end], &rb->core_cells[write]);
         kept.end = write + (kept.end - kept.begin), kept.begin = write, kept.split = true;
         write = kept.end;
         ++stats.split_cores;
-        pool = piece;
       }
       pool = write;
     }
