@@ -12,6 +12,9 @@ struct NormalMap {
   std::vector<double> column;  // running column sums, 9 per cell column, per band (fixed size)
 };
 
+// A cell without a normal holds zero; a fitted one, (-a, -b, 1) normalised, always has z > 0.
+inline bool has_normal(const Eigen::Vector3f& n) { return n.z() != 0; }
+
 // `bands`: how many row bands may be worked at once (each needs its own column sums).
 void reserve_normals(NormalMap* nm, const ZBuffer& zb, int bands = 1);
 

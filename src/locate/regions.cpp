@@ -152,9 +152,8 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
     if (i < side || j < side || i + side >= zb.width || j + side >= zb.height) return false;
     const Eigen::Vector3f &l = nm.n.at(i - side, j), &r = nm.n.at(i + side, j);
     const Eigen::Vector3f &b = nm.n.at(i, j - side), &t = nm.n.at(i, j + side);
-    const auto none = [](const Eigen::Vector3f& n) { return n.z() == 0 && n.x() == 0 && n.y() == 0; };
-    return (!none(l) && !none(r) && l.x() - r.x() > valley_turn) ||
-           (!none(b) && !none(t) && b.y() - t.y() > valley_turn);
+    return (has_normal(l) && has_normal(r) && l.x() - r.x() > valley_turn) ||
+           (has_normal(b) && has_normal(t) && b.y() - t.y() > valley_turn);
   };
   constexpr std::uint8_t kOpen = 1, kSplit = 2;
   const int pool_capacity = int(rb->core_cells.size());
@@ -252,7 +251,7 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
           int& s = rb->stamp.at(ni, nj);
           if (s == stamp) continue;
           const Eigen::Vector3f& nn = nm.n.at(ni, nj);
-          if (nn.z() == 0 && nn.x() == 0) continue;  // no normal
+          if (!has_normal(nn)) continue;
           if (nn.dot(ni_n) <= cont_min || std::abs(zb.z.at(ni, nj) - zi) > step_max) continue;
           // The visible part of a pipe lies within about one diameter below its top: growth does
           // not follow a smoothed edge down onto the floor or the pipe beneath.
