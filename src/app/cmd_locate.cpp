@@ -106,9 +106,9 @@ void add_locate(CLI::App& app) {
     }
     spdlog::info(
         "{} pipes found ({} candidate regions, {} cores ({} split off touching pipes), {} of them in a larger "
-        "one's region) in {:.1f} ms; pick: {}",
+        "one's region, {} grown mostly into earlier regions) in {:.1f} ms; pick: {}",
         out.estimates.size(), out.regions.candidates, out.regions.cores_kept, out.regions.split_cores,
-        out.regions.claimed,
+        out.regions.claimed, out.regions.overlapping,
         out.times.total_ms, pick >= 0 ? "rank " + std::to_string(pick) : std::string("none"));
     const StageTimes& st = out.times;
     spdlog::info(

@@ -137,10 +137,12 @@ void read_locate(Section& s, LocateConfig* c) {
   s.real("core_min_area_of_d2", &c->core_min_area_of_d2, 0, 100, "x D^2");
   s.real("core_max_extent_of_l", &c->core_max_extent_of_l, 0.1, 10, "x L");
   s.real("core_valley_turn", &c->core_valley_turn, 0, 2, "difference of unit-normal components");
+  s.real("core_split_max_area_of_ld", &c->core_split_max_area_of_ld, 0, 1000, "x L x D");
   s.real("region_min_extent_of_l", &c->region_min_extent_of_l, 0, 2, "x L");
   s.real("convexity_min_share", &c->convexity_min_share, 0, 1, "share");
   s.real("region_max_drop_of_d", &c->region_max_drop_of_d, 0.1, 5, "x D");
   s.real("region_max_reach_of_d", &c->region_max_reach_of_d, 0.1, 100, "x D");
+  s.real("region_max_claimed_share", &c->region_max_claimed_share, 0, 1, "share");
   s.real("section_width_min_of_d", &c->section_width_min_of_d, 0.1, 2, "x D");
   s.real("section_width_max_of_d", &c->section_width_max_of_d, 0.1, 3, "x D");
   s.real("scan_step_deg", &c->scan_step_deg, 0.5, 45, "deg");

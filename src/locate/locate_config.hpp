@@ -24,9 +24,12 @@ struct LocateConfig {
   double core_max_extent_of_l = 1.15;   // a core longer than the pipe is not one pipe (bin rims, floor)
   double core_valley_turn = 0.5;        // ... unless it splits where the normals D/4 either side turn
                                         // towards each other by more (unit-normal components; 0: off)
+  double core_split_max_area_of_ld = 8;  // ... and is not larger than this * L * D (else it is floor)
   double region_min_extent_of_l = 0.7;  // a of the paper
   double region_max_drop_of_d = 0.8;    // grown cells lie at most this far below their core
   double region_max_reach_of_d = 1.0;   // ... and at most this far from it (steps of growth)
+  double region_max_claimed_share = 0.75;  // a region with more of its cells in earlier candidates'
+                                           // regions is another piece of a pipe already tried
   double convexity_min_share =
       0.6;  // of the cells grown straight from a core, at least this share tilt away from it
 

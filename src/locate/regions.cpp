@@ -148,6 +148,7 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
   // what falls apart is labelled again.
   const int side = std::max(1, int(std::lround(0.25 * d / zb.pixel_mm)));
   const float valley_turn = float(cfg.core_valley_turn);
+  const float split_area_max = float(cfg.core_split_max_area_of_ld) * l * d;
   const auto in_valley = [&](int i, int j) {
     if (i < side || j < side || i + side >= zb.width || j + side >= zb.height) return false;
     const Eigen::Vector3f &l = nm.n.at(i - side, j), &r = nm.n.at(i + side, j);
@@ -166,7 +167,10 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
       if (keep_core(begin, box)) continue;
       const int end = pool;
       pool = begin;  // seen, dropped ...
-      if (valley_turn <= 0 || float(end - begin) * cell_area < area_min || end + (end - begin) > pool_capacity)
+      // A core far larger than pipes side by side can be (the floor) is not split: its pieces are floor.
+      const float core_area = float(end - begin) * cell_area;
+      if (valley_turn <= 0 || core_area < area_min || core_area > split_area_max ||
+          end + (end - begin) > pool_capacity)
         continue;
       // ... unless, too long, it falls apart along valleys into pieces that are cores.
       for (int k = begin; k < end; ++k) {
@@ -198,7 +202,10 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
   }
   stats.cores_kept = n_cores;
   // Most promising first: the largest cores are the least covered pipes.
-  std::sort(cores, cores + n_cores, [](const Core& a, const Core& b) { return a.area > b.area; });
+  // Equal areas in raster order of their first cell: the order does not depend on where the pool holds them.
+  std::sort(cores, cores + n_cores, [&](const Core& a, const Core& b) {
+    return a.area != b.area ? a.area > b.area : rb->core_cells[a.begin] < rb->core_cells[b.begin];
+  });
 
   // 2. Grow each core while the normal of a neighbour is close to that of the boundary cell.
   int region_pool = 0;
@@ -238,6 +245,11 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
       bool leaked = false;
       const int core_count = cores[c].end - cores[c].begin;
       int ring_cells = 0, ring_lower = 0;
+      // A pipe's top is convex: the cells grown straight from its core tilt away from it. A patch of
+      // floor between pipes grows up their sides instead. Known once the core's cells are worked.
+      const auto convex = [&] {
+        return ring_cells > 0 && float(ring_lower) >= float(cfg.convexity_min_share) * float(ring_cells);
+      };
       for (int head = 0; head < count; ++head) {
         const int ci = column_of(rb->grow_queue[head]), cj = row_of(rb->grow_queue[head]);
         const Eigen::Vector3f& ni_n = nm.n.at(ci, cj);
@@ -272,16 +284,22 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
           if (head < core_count)
             ++ring_cells, ring_lower += nn.x() * float(kDi[k]) + nn.y() * float(kDj[k]) > 0;
         }
-        if (leaked) break;
+        if (leaked || (head + 1 == core_count && !convex())) break;
       }
       if (leaked) break;  // spread over far more than one pipe: not a pipe lying on others
-      // A pipe's top is convex: the cells grown straight from its core tilt away from it. A patch of
-      // floor between pipes grows up their sides instead.
-      if (ring_cells == 0 || float(ring_lower) < float(cfg.convexity_min_share) * float(ring_cells)) break;
+      if (!convex()) break;
       // 3. Keep regions longer than a * L.
       found = box.longer_than(float(cfg.region_min_extent_of_l) * l, zb, cells, count);
     }
     if (!found) continue;
+    // A region lying mostly in earlier ones is another piece of a pipe already taken up (a top
+    // strip broken into pieces whose cores lay apart).
+    int overlap = 0;
+    for (int k = 0; k < count; ++k) overlap += rb->claim.pixels[cells[k]] == claim;
+    if (float(overlap) > float(cfg.region_max_claimed_share) * float(count)) {
+      ++stats.overlapping;
+      continue;
+    }
     CandidateRegion r;
     r.core_begin = cores[c].begin;
     r.core_end = cores[c].end;

@@ -40,6 +40,7 @@ struct RegionStats {
   int candidates = 0;    // grown regions longer than a * L
   int claimed = 0;       // cores lying mostly in an earlier candidate region: one pipe, not grown again
   int split_cores = 0;   // cores kept from too long ones split along valleys (touching pipes)
+  int overlapping = 0;   // grown regions lying mostly in earlier candidate regions: one pipe, not tried again
 };
 
 void reserve_regions(RegionBuffers* rb, const ZBuffer& zb, const LocateConfig& cfg, float tube_d_mm,
