@@ -231,9 +231,10 @@ Pose fit_rigid(const Eigen::Vector3f* src, const Eigen::Vector3f* dst, int n) {
   return out;
 }
 
-RidgeFit ridge_icp(const LocatorModel& lm, const Pose& start, const Eigen::Vector3f* obs, int n_obs,
-                   const Eigen::Vector2f& axis, const LocateConfig& cfg, int max_iterations, IcpBuffers* buf,
-                   float gate_mm, float cell_mm, const Eigen::Vector3f* start_ridge, int start_ridge_count) {
+RidgeFit ridge_icp_steps(const LocatorModel& lm, const Pose& start, const Eigen::Vector3f* obs, int n_obs,
+                         const Eigen::Vector2f& axis, const LocateConfig& cfg, int max_iterations,
+                         IcpBuffers* buf, float gate_mm, float cell_mm, const Eigen::Vector3f* start_ridge,
+                         int start_ridge_count) {
   if (cell_mm <= 0) cell_mm = float(cfg.ridge_cell_mm);
   RidgeFit fit;
   fit.pose = start;
@@ -280,14 +281,29 @@ RidgeFit ridge_icp(const LocatorModel& lm, const Pose& start, const Eigen::Vecto
         delta.translation().norm() + Eigen::AngleAxisd(delta.linear()).angle() * lm.extent_l_mm / 2;
     if (moved < cfg.icp_converged_mm && gate <= 0.5f * d) break;
   }
-  const int nm = model_ridge(lm, fit.pose, axis, cell_mm, cfg, buf);
-  fit.model_ridge_points = nm;
   fit.gate_mm = gate;
-  const float cap = 0.5f * d;
-  const float m2o = truncated_mean(buf->model_ridge.data(), nm, observed, cap, &fit.matched);
+  return fit;
+}
+
+void score_ridge_fit(const LocatorModel& lm, const Eigen::Vector3f* obs, int n_obs, const Eigen::Vector2f& axis,
+                     const LocateConfig& cfg, IcpBuffers* buf, float cell_mm, RidgeFit* fit) {
+  if (cell_mm <= 0) cell_mm = float(cfg.ridge_cell_mm);
+  const int nm = model_ridge(lm, fit->pose, axis, cell_mm, cfg, buf);
+  fit->model_ridge_points = nm;
+  const float cap = 0.5f * lm.tube_d_mm;
+  const float m2o =
+      truncated_mean(buf->model_ridge.data(), nm, SearchSet(obs, n_obs, &buf->observed_columns), cap, &fit->matched);
   const float o2m =
       truncated_mean(obs, n_obs, SearchSet(buf->model_ridge.data(), nm, &buf->model_columns), cap, nullptr);
-  fit.cost_mm = 0.5f * (m2o + o2m);
+  fit->cost_mm = 0.5f * (m2o + o2m);
+}
+
+RidgeFit ridge_icp(const LocatorModel& lm, const Pose& start, const Eigen::Vector3f* obs, int n_obs,
+                   const Eigen::Vector2f& axis, const LocateConfig& cfg, int max_iterations, IcpBuffers* buf,
+                   float gate_mm, float cell_mm, const Eigen::Vector3f* start_ridge, int start_ridge_count) {
+  RidgeFit fit = ridge_icp_steps(lm, start, obs, n_obs, axis, cfg, max_iterations, buf, gate_mm, cell_mm,
+                                 start_ridge, start_ridge_count);
+  score_ridge_fit(lm, obs, n_obs, axis, cfg, buf, cell_mm, &fit);
   return fit;
 }
 

@@ -372,9 +372,9 @@ void Locator::work_candidate(int c, Worker& wk, const Image<float>& depth, const
     // Continued on the coarse ridges, then the last icp_fine_iterations on the fine ones.
     const int left = std::max(1, cfg_.icp_max_iterations - f.iterations);
     const int fine = std::min(left, cfg_.icp_fine_iterations);
-    if (left > fine)
-      f = ridge_icp(lm_, f.pose, wk.coarse_ridge.data(), n_coarse, trace.axis.axis, cfg_, left - fine,
-                    &wk.icp, f.gate_mm, probe_cell);
+    if (left > fine)  // (not evaluated: the fine iterations go on from its pose at once)
+      f = ridge_icp_steps(lm_, f.pose, wk.coarse_ridge.data(), n_coarse, trace.axis.axis, cfg_, left - fine,
+                          &wk.icp, f.gate_mm, probe_cell);
     f = ridge_icp(lm_, f.pose, ridge, trace.ridge_count, trace.axis.axis, cfg_, fine, &wk.icp, f.gate_mm);
     f.seen_through = seen_through(f, wk);
   }
