@@ -208,6 +208,8 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
   });
 
   // 2. Grow each core while the normal of a neighbour is close to that of the boundary cell.
+  int neighbour[8];  // offsets of the 8 neighbours in the buffers' pixels
+  for (int k = 0; k < 8; ++k) neighbour[k] = kDj[k] * w + kDi[k];
   int region_pool = 0;
   const int claim = ++rb->claim_value;
   for (int c = 0; c < n_cores && int(rb->candidates.size()) < cfg.max_candidates; ++c) {
@@ -250,36 +252,40 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
       const auto convex = [&] {
         return ring_cells > 0 && float(ring_lower) >= float(cfg.convexity_min_share) * float(ring_cells);
       };
+      const bool split = cores[c].split;
       for (int head = 0; head < count; ++head) {
         const int ci = column_of(rb->grow_queue[head]), cj = row_of(rb->grow_queue[head]);
-        const Eigen::Vector3f& ni_n = nm.n.at(ci, cj);
-        const float zi = zb.z.at(ci, cj);
+        const int at = cells[head];
+        const Eigen::Vector3f ni_n = nm.n.pixels[std::size_t(at)];
+        const float zi = zb.z.pixels[std::size_t(at)];
         box.add(ci, cj, zi);
-        const int reach = rb->reach.at(ci, cj) + 1;
+        const int reach = rb->reach.pixels[std::size_t(at)] + 1;
         if (reach > reach_limit) continue;
+        // The visible part of a pipe lies within about one diameter below its top: growth does
+        // not follow a smoothed edge down onto the floor or the pipe beneath.
+        const float top = rb->ridge_z.pixels[std::size_t(at)];
+        const bool inside = ci > 0 && cj > 0 && ci + 1 < zb.width && cj + 1 < zb.height;
         for (int k = 0; k < 8; ++k) {
           const int ni = ci + kDi[k], nj = cj + kDj[k];
-          if (ni < 0 || nj < 0 || ni >= zb.width || nj >= zb.height) continue;
-          int& s = rb->stamp.at(ni, nj);
+          if (!inside && (ni < 0 || nj < 0 || ni >= zb.width || nj >= zb.height)) continue;
+          const std::size_t q = std::size_t(at + neighbour[k]);
+          int& s = rb->stamp.pixels[q];
           if (s == stamp) continue;
-          const Eigen::Vector3f& nn = nm.n.at(ni, nj);
+          const Eigen::Vector3f& nn = nm.n.pixels[q];
           if (!has_normal(nn)) continue;
-          if (nn.dot(ni_n) <= cont_min || std::abs(zb.z.at(ni, nj) - zi) > step_max) continue;
-          // The visible part of a pipe lies within about one diameter below its top: growth does
-          // not follow a smoothed edge down onto the floor or the pipe beneath.
-          const float top = rb->ridge_z.at(ci, cj);
-          if (zb.z.at(ni, nj) < top - drop_max) continue;
+          const float zq = zb.z.pixels[q];
+          if (nn.dot(ni_n) <= cont_min || std::abs(zq - zi) > step_max || zq < top - drop_max) continue;
           // A piece of a split core does not grow back over the valley it was split along.
-          if (cores[c].split && in_valley(ni, nj)) continue;
-          rb->ridge_z.at(ni, nj) = top;
-          rb->reach.at(ni, nj) = reach;
+          if (split && in_valley(ni, nj)) continue;
+          rb->ridge_z.pixels[q] = top;
+          rb->reach.pixels[q] = reach;
           if (count >= rb->max_region_cells) {
             leaked = true;
             break;
           }
           s = stamp;
           rb->grow_queue[count] = pack(ni, nj);
-          cells[count++] = zb.index(ni, nj);
+          cells[count++] = int(q);
           // Convex: beside the core the surface tilts away from it (plane-fit normals, not noisy heights).
           if (head < core_count)
             ++ring_cells, ring_lower += nn.x() * float(kDi[k]) + nn.y() * float(kDj[k]) > 0;
