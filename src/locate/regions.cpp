@@ -212,12 +212,16 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
   for (int k = 0; k < 8; ++k) neighbour[k] = kDj[k] * w + kDi[k];
   int region_pool = 0;
   const int claim = ++rb->claim_value;
+  // How many of the cells lie in regions already handed out.
+  const auto claimed = [&](const int* cells, int n) {
+    int in = 0;
+    for (int k = 0; k < n; ++k) in += rb->claim.pixels[std::size_t(cells[k])] == claim;
+    return in;
+  };
   for (int c = 0; c < n_cores && int(rb->candidates.size()) < cfg.max_candidates; ++c) {
     // A core lying mostly in the region of a larger one is another piece of that pipe's top.
-    int claimed = 0;
-    for (int k = cores[c].begin; k < cores[c].end; ++k)
-      claimed += rb->claim.pixels[rb->core_cells[k]] == claim;
-    if (2 * claimed > cores[c].end - cores[c].begin) {
+    const int core_count = cores[c].end - cores[c].begin;
+    if (2 * claimed(&rb->core_cells[std::size_t(cores[c].begin)], core_count) > core_count) {
       ++stats.claimed;
       continue;
     }
@@ -243,9 +247,8 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
         rb->reach.pixels[rb->core_cells[k]] = 0;
         centroid += zb.point(rb->core_cells[k] % w, rb->core_cells[k] / w);
       }
-      centroid /= float(cores[c].end - cores[c].begin);
+      centroid /= float(core_count);
       bool leaked = false;
-      const int core_count = cores[c].end - cores[c].begin;
       int ring_cells = 0, ring_lower = 0;
       // A pipe's top is convex: the cells grown straight from its core tilt away from it. A patch of
       // floor between pipes grows up their sides instead. Known once the core's cells are worked.
@@ -300,9 +303,7 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
     if (!found) continue;
     // A region lying mostly in earlier ones is another piece of a pipe already taken up (a top
     // strip broken into pieces whose cores lay apart).
-    int overlap = 0;
-    for (int k = 0; k < count; ++k) overlap += rb->claim.pixels[cells[k]] == claim;
-    if (float(overlap) > float(cfg.region_max_claimed_share) * float(count)) {
+    if (float(claimed(cells, count)) > float(cfg.region_max_claimed_share) * float(count)) {
       ++stats.overlapping;
       continue;
     }
