@@ -381,6 +381,11 @@ std::vector<int> pipe_votes(const Locator& loc, const PipeModel& model, const Si
   return votes;
 }
 
+// The pipe most of the cells voted for.
+std::size_t most_voted(const std::vector<int>& votes) {
+  return std::size_t(std::max_element(votes.begin(), votes.end()) - votes.begin());
+}
+
 TEST(Segmentation, CandidateCoresLieOnTopPipes) {
   const PipeModel& model = preset_model("u");
   const SimulatedScene s = pile_of(model, 12, 21);
@@ -395,10 +400,10 @@ TEST(Segmentation, CandidateCoresLieOnTopPipes) {
   for (const auto& cand : rb.candidates) {
     const std::vector<int> votes = pipe_votes(loc, model, s, &rb.core_cells[std::size_t(cand.core_begin)],
                                               cand.core_end - cand.core_begin, 3.0f);
-    const auto best = std::max_element(votes.begin(), votes.end()) - votes.begin();
+    const std::size_t best = most_voted(votes);
     const int core = cand.core_end - cand.core_begin;
-    EXPECT_GT(votes[std::size_t(best)], core * 7 / 10);
-    on_top += s.info[std::size_t(best)].occ_by_pipes <= 0.15;
+    EXPECT_GT(votes[best], core * 7 / 10);
+    on_top += s.info[best].occ_by_pipes <= 0.15;
   }
   EXPECT_GE(on_top * 10, int(rb.candidates.size()) * 7);
 }
@@ -423,7 +428,7 @@ TEST(Segmentation, APipeBrokenIntoPiecesIsTriedOnce) {
       for (const auto& cand : rb.candidates) {
         const std::vector<int> votes = pipe_votes(loc, model, s, &rb.region_cells[std::size_t(cand.cells_begin)],
                                                   cand.cells_end - cand.cells_begin, 3.0f);
-        ++per_pipe[std::size_t(std::max_element(votes.begin(), votes.end()) - votes.begin())];
+        ++per_pipe[most_voted(votes)];
       }
       return per_pipe;
     };
@@ -482,8 +487,8 @@ TEST(Segmentation, TouchingPipesSideBySideGetACoreEach) {
       for (const auto& cand : rb.candidates) {
         const std::vector<int> votes = pipe_votes(loc, model, s, &rb.core_cells[std::size_t(cand.core_begin)],
                                                   cand.core_end - cand.core_begin, 3.0f);
-        const auto best = std::max_element(votes.begin(), votes.end()) - votes.begin();
-        if (votes[std::size_t(best)] > (cand.core_end - cand.core_begin) * 7 / 10)
+        const std::size_t best = most_voted(votes);
+        if (votes[best] > (cand.core_end - cand.core_begin) * 7 / 10)
           on[best] = true;
         else
           ++off_pipe;

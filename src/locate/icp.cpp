@@ -231,17 +231,18 @@ Pose fit_rigid(const Eigen::Vector3f* src, const Eigen::Vector3f* dst, int n) {
   return out;
 }
 
-RidgeFit ridge_icp_steps(const LocatorModel& lm, const Pose& start, const Eigen::Vector3f* obs, int n_obs,
-                         const Eigen::Vector2f& axis, const LocateConfig& cfg, int max_iterations,
-                         IcpBuffers* buf, float gate_mm, float cell_mm, const Eigen::Vector3f* start_ridge,
-                         int start_ridge_count) {
-  if (cell_mm <= 0) cell_mm = float(cfg.ridge_cell_mm);
+namespace {
+
+// ridge_icp's iterations on the observed ridge laid out once as `observed` (cell_mm > 0).
+RidgeFit iterate_ridge_icp(const LocatorModel& lm, const Pose& start, const Eigen::Vector3f* obs, int n_obs,
+                           const SearchSet& observed, const Eigen::Vector2f& axis, const LocateConfig& cfg,
+                           int max_iterations, IcpBuffers* buf, float gate_mm, float cell_mm,
+                           const Eigen::Vector3f* start_ridge, int start_ridge_count) {
   RidgeFit fit;
   fit.pose = start;
   const float d = lm.tube_d_mm;
   // Correspondences farther than this are dropped; it shrinks from a third of the pipe to D/2.
   float gate = gate_mm > 0 ? gate_mm : std::max(lm.extent_l_mm / 3, d);
-  const SearchSet observed(obs, n_obs, &buf->observed_columns);
   for (int it = 0; it < max_iterations; ++it) {
     fit.iterations = it + 1;
     int nm = 0;  // 2.2.1
@@ -285,25 +286,40 @@ RidgeFit ridge_icp_steps(const LocatorModel& lm, const Pose& start, const Eigen:
   return fit;
 }
 
-void score_ridge_fit(const LocatorModel& lm, const Eigen::Vector3f* obs, int n_obs, const Eigen::Vector2f& axis,
-                     const LocateConfig& cfg, IcpBuffers* buf, float cell_mm, RidgeFit* fit) {
-  if (cell_mm <= 0) cell_mm = float(cfg.ridge_cell_mm);
+// ridge_icp's closing evaluation of fit->pose: cost_mm, matched, model_ridge_points (the model's
+// ridge stays in buf->model_ridge).
+void score_ridge_fit(const LocatorModel& lm, const Eigen::Vector3f* obs, int n_obs, const SearchSet& observed,
+                     const Eigen::Vector2f& axis, const LocateConfig& cfg, IcpBuffers* buf, float cell_mm,
+                     RidgeFit* fit) {
   const int nm = model_ridge(lm, fit->pose, axis, cell_mm, cfg, buf);
   fit->model_ridge_points = nm;
   const float cap = 0.5f * lm.tube_d_mm;
-  const float m2o =
-      truncated_mean(buf->model_ridge.data(), nm, SearchSet(obs, n_obs, &buf->observed_columns), cap, &fit->matched);
+  const float m2o = truncated_mean(buf->model_ridge.data(), nm, observed, cap, &fit->matched);
   const float o2m =
       truncated_mean(obs, n_obs, SearchSet(buf->model_ridge.data(), nm, &buf->model_columns), cap, nullptr);
   fit->cost_mm = 0.5f * (m2o + o2m);
 }
 
+}  // namespace
+
+RidgeFit ridge_icp_steps(const LocatorModel& lm, const Pose& start, const Eigen::Vector3f* obs, int n_obs,
+                         const Eigen::Vector2f& axis, const LocateConfig& cfg, int max_iterations,
+                         IcpBuffers* buf, float gate_mm, float cell_mm, const Eigen::Vector3f* start_ridge,
+                         int start_ridge_count) {
+  if (cell_mm <= 0) cell_mm = float(cfg.ridge_cell_mm);
+  const SearchSet observed(obs, n_obs, &buf->observed_columns);
+  return iterate_ridge_icp(lm, start, obs, n_obs, observed, axis, cfg, max_iterations, buf, gate_mm, cell_mm,
+                           start_ridge, start_ridge_count);
+}
+
 RidgeFit ridge_icp(const LocatorModel& lm, const Pose& start, const Eigen::Vector3f* obs, int n_obs,
                    const Eigen::Vector2f& axis, const LocateConfig& cfg, int max_iterations, IcpBuffers* buf,
                    float gate_mm, float cell_mm, const Eigen::Vector3f* start_ridge, int start_ridge_count) {
-  RidgeFit fit = ridge_icp_steps(lm, start, obs, n_obs, axis, cfg, max_iterations, buf, gate_mm, cell_mm,
-                                 start_ridge, start_ridge_count);
-  score_ridge_fit(lm, obs, n_obs, axis, cfg, buf, cell_mm, &fit);
+  if (cell_mm <= 0) cell_mm = float(cfg.ridge_cell_mm);
+  const SearchSet observed(obs, n_obs, &buf->observed_columns);  // laid out once for both steps
+  RidgeFit fit = iterate_ridge_icp(lm, start, obs, n_obs, observed, axis, cfg, max_iterations, buf, gate_mm,
+                                   cell_mm, start_ridge, start_ridge_count);
+  score_ridge_fit(lm, obs, n_obs, observed, axis, cfg, buf, cell_mm, &fit);
   return fit;
 }
 

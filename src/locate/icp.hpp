@@ -113,11 +113,6 @@ RidgeFit ridge_icp_steps(const LocatorModel& lm, const Pose& start, const Eigen:
                          int n_observed, const Eigen::Vector2f& axis, const LocateConfig& cfg, int max_iterations,
                          IcpBuffers* buf, float gate_mm = -1, float cell_mm = -1,
                          const Eigen::Vector3f* start_ridge = nullptr, int start_ridge_count = 0);
-// ridge_icp's closing evaluation of fit->pose: cost_mm, matched, model_ridge_points (the model's
-// ridge stays in buf->model_ridge).
-void score_ridge_fit(const LocatorModel& lm, const Eigen::Vector3f* observed_ridge, int n_observed,
-                     const Eigen::Vector2f& axis, const LocateConfig& cfg, IcpBuffers* buf, float cell_mm,
-                     RidgeFit* fit);
 
 struct RefineResult {
   Pose pose = Pose::Identity();
