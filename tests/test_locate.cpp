@@ -366,7 +366,7 @@ TEST(ZBufferBuild, RowBandsOnThreadsGiveTheSameBufferAsOneBand) {
 }
 
 // For each pipe of the scene, how many of the given Z-buffer cells lie within tol_mm of its surface.
-std::vector<int> pipe_votes(const Locator& loc, const PipeModel& model, const SimulatedScene& s,
+std::vector<int> pipe_votes(const Locator& loc, const SimulatedScene& s,
                             const int* cells, int n, float tol_mm) {
   std::vector<int> votes(s.model_to_world.size(), 0);
   const ZBuffer& zb = loc.zbuffer();
@@ -374,8 +374,8 @@ std::vector<int> pipe_votes(const Locator& loc, const PipeModel& model, const Si
     const Eigen::Vector3d pt = zb.point(cells[k] % zb.z.width, cells[k] / zb.z.width).cast<double>();
     for (std::size_t g = 0; g < votes.size(); ++g) {
       const Eigen::Vector3f q = (s.model_to_world[g].inverse() * pt).cast<float>();
-      const int smp = loc.locator_model().nearest_sample(q);
-      votes[g] += smp >= 0 && (model.surface.points[std::size_t(smp)] - q).norm() < tol_mm;
+      const LocatorModel::Sample* smp = loc.locator_model().nearest_sample(q);
+      votes[g] += smp && (smp->p - q).norm() < tol_mm;
     }
   }
   return votes;
@@ -398,7 +398,7 @@ TEST(Segmentation, CandidateCoresLieOnTopPipes) {
   // mostly one pipe, and that pipe little covered by others.
   int on_top = 0;
   for (const auto& cand : rb.candidates) {
-    const std::vector<int> votes = pipe_votes(loc, model, s, &rb.core_cells[std::size_t(cand.core_begin)],
+    const std::vector<int> votes = pipe_votes(loc, s, &rb.core_cells[std::size_t(cand.core_begin)],
                                               cand.core_end - cand.core_begin, 3.0f);
     const std::size_t best = most_voted(votes);
     const int core = cand.core_end - cand.core_begin;
@@ -426,7 +426,7 @@ TEST(Segmentation, APipeBrokenIntoPiecesIsTriedOnce) {
       const auto& rb = loc.regions();
       std::vector<int> per_pipe(s.model_to_world.size(), 0);
       for (const auto& cand : rb.candidates) {
-        const std::vector<int> votes = pipe_votes(loc, model, s, &rb.region_cells[std::size_t(cand.cells_begin)],
+        const std::vector<int> votes = pipe_votes(loc, s, &rb.region_cells[std::size_t(cand.cells_begin)],
                                                   cand.cells_end - cand.cells_begin, 3.0f);
         ++per_pipe[most_voted(votes)];
       }
@@ -485,7 +485,7 @@ TEST(Segmentation, TouchingPipesSideBySideGetACoreEach) {
       const auto& rb = loc.regions();
       bool on[2] = {false, false};
       for (const auto& cand : rb.candidates) {
-        const std::vector<int> votes = pipe_votes(loc, model, s, &rb.core_cells[std::size_t(cand.core_begin)],
+        const std::vector<int> votes = pipe_votes(loc, s, &rb.core_cells[std::size_t(cand.core_begin)],
                                                   cand.core_end - cand.core_begin, 3.0f);
         const std::size_t best = most_voted(votes);
         if (votes[best] > (cand.core_end - cand.core_begin) * 7 / 10)
@@ -517,7 +517,7 @@ double mean_region_purity(const PipeModel& model, const SimulatedScene& s, const
   const auto& rb = loc.regions();
   double sum = 0;
   for (const auto& cand : rb.candidates) {
-    const std::vector<int> votes = pipe_votes(loc, model, s, &rb.region_cells[std::size_t(cand.cells_begin)],
+    const std::vector<int> votes = pipe_votes(loc, s, &rb.region_cells[std::size_t(cand.cells_begin)],
                                               cand.cells_end - cand.cells_begin, 6.0f);
     sum += double(*std::max_element(votes.begin(), votes.end())) / double(cand.cells_end - cand.cells_begin);
   }

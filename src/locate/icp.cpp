@@ -327,8 +327,6 @@ RefineResult refine_on_surface(const LocatorModel& lm, const Pose& start, const 
                                const LocateConfig& cfg) {
   RefineResult res;
   res.pose = start;
-  const auto& sp = lm.model->surface.points;
-  const auto& sn = lm.model->surface.normals;
   const float inlier = float(cfg.refine_inlier_mm);
   // Coarse to fine: all but the last kFineIterations use every third point; the last (and the
   // reported inliers and rms) all of them.
@@ -348,7 +346,7 @@ RefineResult refine_on_surface(const LocatorModel& lm, const Pose& start, const 
     // of each waiting for the last.
     constexpr int kBatch = 16;
     Eigen::Vector3f batch_q[kBatch];
-    int batch_s[kBatch];
+    const LocatorModel::Sample* batch_s[kBatch];
     for (int i0 = 0; i0 < n; i0 += stride * kBatch) {
       const int in_batch = std::min(kBatch, (n - i0 + stride - 1) / stride);
       for (int k = 0; k < in_batch; ++k) {
@@ -357,24 +355,28 @@ RefineResult refine_on_surface(const LocatorModel& lm, const Pose& start, const 
       }
       for (int k = 0; k < in_batch; ++k) {
         const Eigen::Vector3f& q = batch_q[k];
-        const int s = batch_s[k];
-        if (s < 0) continue;
-        const Eigen::Vector3f diff = q - sp[s];
+        const LocatorModel::Sample* s = batch_s[k];
+        if (!s) continue;
+        const Eigen::Vector3f diff = q - s->p;
         if (diff.squaredNorm() > inlier * inlier) continue;
-        const Eigen::Vector3f nw = r * sn[s];
-        const Eigen::Vector3f mw = r * sp[s] + t - c;
+        const Eigen::Vector3f nw = r * s->n;
+        const Eigen::Vector3f mw = r * s->p + t - c;
         const float res_i = nw.dot(r * diff);  // observed minus model, along the normal
         // Moving the model by (w, v) changes the model point by w x m + v.
         Eigen::Matrix<double, 6, 1> j;
         j.head<3>() = mw.cross(nw).cast<double>();
         j.tail<3>() = nw.cast<double>();
         const double w = std::abs(res_i) < 1.5f ? 1.0 : 1.5 / std::abs(res_i);  // Huber
-        a += w * j * j.transpose();
-        b += w * j * double(res_i);
+        const Eigen::Matrix<double, 6, 1> wj = w * j;
+        // The lower triangle only (the solve reads no more); mirrored once per iteration.
+        for (int col = 0; col < 6; ++col)
+          for (int row = col; row < 6; ++row) a(row, col) += wj(row) * j(col);
+        b += wj * double(res_i);
         ++inliers;
         sq += double(res_i) * res_i;
       }
     }
+    a.triangularView<Eigen::StrictlyUpper>() = a.transpose();
     res.inliers = inliers * stride;  // about: only the fine iterations count them all
     res.rms_mm = inliers ? float(std::sqrt(sq / inliers)) : 0.f;
     if (inliers < 12) break;

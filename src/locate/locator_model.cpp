@@ -3,6 +3,8 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
+#include <string>
 
 #include "locate/locate_config.hpp"
 #include "locate/principal_axis.hpp"
@@ -108,14 +110,14 @@ LocatorModel prepare_locator_model(const PipeModel& model, float margin_mm, cons
   lm.nx = int(size.x() / lm.voxel_mm) + 1;
   lm.ny = int(size.y() / lm.voxel_mm) + 1;
   lm.nz = int(size.z() / lm.voxel_mm) + 1;
-  lm.voxel_sample.assign(std::size_t(lm.nx) * lm.ny * lm.nz, -1);
+  std::vector<int> voxel_sample(std::size_t(lm.nx) * lm.ny * lm.nz, -1);
   std::vector<int> queue;
-  queue.reserve(lm.voxel_sample.size());
+  queue.reserve(voxel_sample.size());
   auto voxel_of = [&](const Eigen::Vector3f& p) {
     const Eigen::Vector3f g = (p - lm.voxel_origin) / lm.voxel_mm;
     return (std::size_t(g.z()) * lm.ny + std::size_t(g.y())) * lm.nx + std::size_t(g.x());
   };
-  std::vector<float> best(lm.voxel_sample.size(), 1e30f);
+  std::vector<float> best(voxel_sample.size(), 1e30f);
   auto centre_of = [&](std::size_t v) {
     const int i = int(v % lm.nx), j = int((v / lm.nx) % lm.ny), k = int(v / (std::size_t(lm.nx) * lm.ny));
     return Eigen::Vector3f(lm.voxel_origin + lm.voxel_mm * Eigen::Vector3f(i + 0.5f, j + 0.5f, k + 0.5f));
@@ -123,13 +125,13 @@ LocatorModel prepare_locator_model(const PipeModel& model, float margin_mm, cons
   for (std::size_t s = 0; s < pts.size(); ++s) {
     const std::size_t v = voxel_of(pts[s]);
     const float d = (centre_of(v) - pts[s]).squaredNorm();
-    if (lm.voxel_sample[v] < 0) queue.push_back(int(v));
-    if (d < best[v]) best[v] = d, lm.voxel_sample[v] = int(s);
+    if (voxel_sample[v] < 0) queue.push_back(int(v));
+    if (d < best[v]) best[v] = d, voxel_sample[v] = int(s);
   }
   const float margin_sq = margin_mm * margin_mm;
   for (std::size_t head = 0; head < queue.size(); ++head) {
     const std::size_t v = std::size_t(queue[head]);
-    const int s = lm.voxel_sample[v];
+    const int s = voxel_sample[v];
     const int i = int(v % lm.nx), j = int((v / lm.nx) % lm.ny), k = int(v / (std::size_t(lm.nx) * lm.ny));
     const int nb[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
     for (const auto& o : nb) {
@@ -138,11 +140,28 @@ LocatorModel prepare_locator_model(const PipeModel& model, float margin_mm, cons
       const std::size_t w = (std::size_t(c) * lm.ny + b) * lm.nx + a;
       const float d = (centre_of(w) - pts[s]).squaredNorm();
       if (d > margin_sq || d >= best[w]) continue;
-      if (lm.voxel_sample[w] < 0) queue.push_back(int(w));
+      if (voxel_sample[w] < 0) queue.push_back(int(w));
       best[w] = d;
-      lm.voxel_sample[w] = s;
+      voxel_sample[w] = s;
     }
   }
+  // Compacted: only the samples some voxel names, numbered in sample order.
+  std::vector<int> number(pts.size(), -1);
+  for (const int s : voxel_sample)
+    if (s >= 0) number[std::size_t(s)] = 0;
+  for (std::size_t s = 0; s < pts.size(); ++s) {
+    if (number[s] < 0) continue;
+    number[s] = int(lm.samples.size());
+    lm.samples.push_back({pts[s], model.surface.normals[s]});
+  }
+  // PipeModel caps its samples well below this; a larger model must not wrap the index around.
+  if (lm.samples.size() >= LocatorModel::kNoSample)
+    throw std::runtime_error("model: " + std::to_string(lm.samples.size()) +
+                             " surface samples near voxels, more than the refinement's index holds (65534)");
+  lm.voxel_sample.resize(voxel_sample.size());
+  for (std::size_t v = 0; v < voxel_sample.size(); ++v)
+    lm.voxel_sample[v] =
+        voxel_sample[v] < 0 ? LocatorModel::kNoSample : std::uint16_t(number[std::size_t(voxel_sample[v])]);
   // Lying frame: largest spread along X, least spread up; then the turns about X.
   Eigen::Matrix3d lying;
   lying.row(0) = lm.axis.cast<double>().transpose();

@@ -3,6 +3,7 @@
 // O(1) closest-point look-ups during refinement.
 #pragma once
 
+#include <cstdint>
 #include <vector>
 
 #include "locate/zridge.hpp"
@@ -47,16 +48,24 @@ struct LocatorModel {
   double yaw_offset_rad(int y) const { return (y - yaw_offsets / 2) * yaw_step_rad; }
 
   // Voxel index: nearest surface sample of each voxel centre within `margin` of the surface.
+  // Compact, for the refinement's cache: two bytes a voxel, naming a sample whose point and normal
+  // lie side by side.
+  struct Sample {
+    Eigen::Vector3f p, n;  // model frame; outward
+  };
+  static constexpr std::uint16_t kNoSample = 0xffff;  // further than the margin
   Eigen::Vector3f voxel_origin = Eigen::Vector3f::Zero();
   float voxel_mm = 2;
   int nx = 0, ny = 0, nz = 0;
-  std::vector<int> voxel_sample;  // -1: further than the margin
+  std::vector<std::uint16_t> voxel_sample;  // into samples
+  std::vector<Sample> samples;              // those some voxel names, in surface-sample order
 
-  int nearest_sample(const Eigen::Vector3f& p_model) const {
+  const Sample* nearest_sample(const Eigen::Vector3f& p_model) const {
     const Eigen::Vector3f g = (p_model - voxel_origin) / voxel_mm;
     const int i = int(g.x()), j = int(g.y()), k = int(g.z());
-    if (g.x() < 0 || g.y() < 0 || g.z() < 0 || i >= nx || j >= ny || k >= nz) return -1;
-    return voxel_sample[(std::size_t(k) * ny + j) * nx + i];
+    if (g.x() < 0 || g.y() < 0 || g.z() < 0 || i >= nx || j >= ny || k >= nz) return nullptr;
+    const std::uint16_t s = voxel_sample[(std::size_t(k) * ny + j) * nx + i];
+    return s == kNoSample ? nullptr : &samples[s];
   }
 };
 
