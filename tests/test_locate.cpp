@@ -81,8 +81,7 @@ TEST(Normals, RowBandsGiveTheSameNormalsAsOnePass) {
   compute_normals(zb, 7, 20, &one);
   const int cuts[] = {0, 17, 41, zb.height};
   for (int b = 0; b < 3; ++b)
-    compute_normals_rows(zb, 7, 20, cuts[b], cuts[b + 1],
-                         banded.column.data() + std::size_t(b) * 9 * zb.z.width, &banded);
+    compute_normals_rows(zb, 7, 20, cuts[b], cuts[b + 1], b, &banded);
   for (int j = 0; j < zb.height; ++j)
     for (int i = 0; i < zb.width; ++i)
       EXPECT_LT((one.n.at(i, j) - banded.n.at(i, j)).norm(), 1e-5f) << i << "," << j;

@@ -106,8 +106,7 @@ const LocateOutput& Locator::locate(const Image<float>& depth, const CameraInfo&
       const NormalTask& t = *static_cast<const NormalTask*>(ctx);
       const ZBuffer& zb = t.self->zb_;
       compute_normals_rows(zb, t.window, t.min_valid, band_begin(band, t.bands, zb.height),
-                           band_begin(band + 1, t.bands, zb.height),
-                           t.self->nm_.column.data() + std::size_t(band) * 9 * zb.z.width, &t.self->nm_);
+                           band_begin(band + 1, t.bands, zb.height), band, &t.self->nm_);
     }
   } normal_task{this, window, int(cfg_.normal_min_valid_share * window * window), pool_.size()};
   pool_.run(pool_.size(), &NormalTask::run, &normal_task);

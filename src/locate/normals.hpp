@@ -8,8 +8,9 @@
 namespace pipeloc {
 
 struct NormalMap {
-  Image<Eigen::Vector3f> n;    // unit, Z up; zero where there is no normal
-  std::vector<double> column;  // running column sums, 9 per cell column, per band (fixed size)
+  Image<Eigen::Vector3f> n;  // unit, Z up; zero where there is no normal
+  int bands = 1;             // row bands that may be worked at once
+  std::vector<double> sums;  // per band: 9 running column sums and 9 window sums per cell column
 };
 
 // A cell without a normal holds zero; a fitted one, (-a, -b, 1) normalised, always has z > 0.
@@ -18,9 +19,9 @@ inline bool has_normal(const Eigen::Vector3f& n) { return n.z() != 0; }
 // `bands`: how many row bands may be worked at once (each needs its own column sums).
 void reserve_normals(NormalMap* nm, const ZBuffer& zb, int bands = 1);
 
-// Rows [j0, j1) only, with `column` (9 x width doubles) as this band's running sums: bands of
-// one Z-buffer can run on different threads.
-void compute_normals_rows(const ZBuffer& zb, int window_cells, int min_valid, int j0, int j1, double* column,
+// Rows [j0, j1) only, with band `band` (< the bands reserved) of the scratch sums: bands of one
+// Z-buffer can run on different threads.
+void compute_normals_rows(const ZBuffer& zb, int window_cells, int min_valid, int j0, int j1, int band,
                           NormalMap* nm);
 
 // window_cells odd; cells with fewer than min_valid valid neighbours get no normal.
