@@ -341,7 +341,7 @@ TEST(ZBufferBuild, RowBandsOnThreadsGiveTheSameBufferAsOneBand) {
   ZBuffer one;
   reserve_zbuffer(&one, cfg.zbuffer_max_side_mm, cfg.zbuffer_pixel_mm);
   ZBufferPoints pts;
-  reserve_zbuffer_points(&pts, s.depth_mm.width * s.depth_mm.height, 1);
+  reserve_zbuffer_points(&pts, s.depth_mm.width, s.depth_mm.height, 1);
   HoleList holes;
   holes.reserve(one);
   EXPECT_GT(build_zbuffer(s.depth_mm, s.camera.intrinsics, bin_to_camera(s.camera), &pts, &one), 0);

@@ -45,7 +45,7 @@ Locator::Locator(const PipeModel& model, const LocateConfig& cfg, const Intrinsi
   starts_ = prepare_starts(lm_, cfg);
   reserve_zbuffer(&zb_, cfg.zbuffer_max_side_mm, cfg.zbuffer_pixel_mm);
   camera_width_ = camera.width, camera_height_ = camera.height;
-  reserve_zbuffer_points(&zb_points_, camera.width * camera.height, pool_.size());
+  reserve_zbuffer_points(&zb_points_, camera.width, camera.height, pool_.size());
   reserve_normals(&nm_, zb_, pool_.size());
   holes_.reserve(zb_);
   band_holes_.assign(std::size_t(pool_.size()), 0);

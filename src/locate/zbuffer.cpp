@@ -30,9 +30,11 @@ void reserve_zbuffer(ZBuffer* zb, double max_side_mm, double pixel_mm) {
   zb->width = zb->height = 0;
 }
 
-void reserve_zbuffer_points(ZBufferPoints* pts, int pixels, int bands) {
-  pts->p.assign(std::size_t(pixels), Eigen::Vector4f::Zero());
+void reserve_zbuffer_points(ZBufferPoints* pts, int width, int height, int bands) {
+  pts->width = width, pts->height = height;
+  pts->p.assign(std::size_t(width) * height, Eigen::Vector4f::Zero());
   pts->band.assign(std::size_t(std::max(1, bands)), {});
+  pts->row.assign(std::size_t(height), {});
 }
 
 void zbuffer_points_rows(const Image<float>& depth, const Intrinsics& k, const Pose& bin_to_cam,
@@ -42,7 +44,8 @@ void zbuffer_points_rows(const Image<float>& depth, const Intrinsics& k, const P
   const float fx = float(k.fx), fy = float(k.fy), cx = float(k.cx), cy = float(k.cy);
   const float inv = float(1.0 / pixel_mm);
   ZBufferPoints::Extent e;
-  for (int v = v0; v < v1; ++v)
+  for (int v = v0; v < v1; ++v) {
+    ZBufferPoints::RowSpan span{1e30f, -1e30f, -1};
     for (int u = 0; u < depth.width; ++u) {
       Eigen::Vector4f& out = pts->p[std::size_t(v) * depth.width + u];
       const float d = depth.at(u, v);
@@ -56,7 +59,11 @@ void zbuffer_points_rows(const Image<float>& depth, const Intrinsics& k, const P
       e.lo_x = std::min(e.lo_x, p.x()), e.hi_x = std::max(e.hi_x, p.x());
       e.lo_y = std::min(e.lo_y, p.y()), e.hi_y = std::max(e.hi_y, p.y());
       ++e.valid;
+      span.lo_y = std::min(span.lo_y, p.y()), span.hi_y = std::max(span.hi_y, p.y());
+      span.half = std::max(span.half, out.w());
     }
+    pts->row[std::size_t(v)] = span;
+  }
   pts->band[std::size_t(band)] = e;
 }
 
@@ -91,19 +98,29 @@ void splat_zbuffer_rows(const ZBufferPoints& pts, int j0, int j1, ZBuffer* zb) {
   for (int j = j0; j < j1; ++j) std::fill_n(&zb->z.at(0, j), zb->width, kLowest);
   const float inv = float(1.0 / zb->pixel_mm);
   const float ox = float(zb->origin_x_mm), oy = float(zb->origin_y_mm);
-  for (const Eigen::Vector4f& p : pts.p) {
-    const float half = p.w();
-    if (half < 0) continue;
-    const float cj = (p.y() - oy) * inv;
-    const int jlo = std::max(j0, int(round_nearest(cj - half))),
-              jhi = std::min(j1 - 1, int(round_nearest(cj + half)));
-    if (jlo > jhi) continue;
-    const float ci = (p.x() - ox) * inv;
-    const int i0 = std::max(0, int(round_nearest(ci - half))),
-              i1 = std::min(zb->width - 1, int(round_nearest(ci + half)));
-    for (int j = jlo; j <= jhi; ++j) {
-      float* row = &zb->z.at(0, j);
-      for (int i = i0; i <= i1; ++i) row[i] = std::max(row[i], p.z());
+  for (int v = 0; v < pts.height; ++v) {
+    // The rows a point reaches grow with its y and its footprint: an image row whose extremes
+    // cannot reach these rows holds no point that can.
+    const ZBufferPoints::RowSpan& span = pts.row[std::size_t(v)];
+    if (span.half < 0 || int(round_nearest((span.hi_y - oy) * inv + span.half)) < j0 ||
+        int(round_nearest((span.lo_y - oy) * inv - span.half)) > j1 - 1)
+      continue;
+    const Eigen::Vector4f* image_row = &pts.p[std::size_t(v) * pts.width];
+    for (int u = 0; u < pts.width; ++u) {
+      const Eigen::Vector4f& p = image_row[u];
+      const float half = p.w();
+      if (half < 0) continue;
+      const float cj = (p.y() - oy) * inv;
+      const int jlo = std::max(j0, int(round_nearest(cj - half))),
+                jhi = std::min(j1 - 1, int(round_nearest(cj + half)));
+      if (jlo > jhi) continue;
+      const float ci = (p.x() - ox) * inv;
+      const int i0 = std::max(0, int(round_nearest(ci - half))),
+                i1 = std::min(zb->width - 1, int(round_nearest(ci + half)));
+      for (int j = jlo; j <= jhi; ++j) {
+        float* row = &zb->z.at(0, j);
+        for (int i = i0; i <= i1; ++i) row[i] = std::max(row[i], p.z());
+      }
     }
   }
   for (int j = j0; j < j1; ++j) {

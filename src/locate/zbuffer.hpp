@@ -44,11 +44,19 @@ struct ZBufferPoints {
     float lo_x = 1e30f, lo_y = 1e30f, hi_x = -1e30f, hi_y = -1e30f;
     int valid = 0;
   };
+  // Per image row: the least and greatest y of its valid points (bin) and their widest footprint
+  // half-width in cells (< 0: none valid), so that a band of buffer rows skips the image rows
+  // that cannot reach it.
+  struct RowSpan {
+    float lo_y = 0, hi_y = 0, half = -1;
+  };
+  int width = 0, height = 0;  // of the depth image
   std::vector<Eigen::Vector4f>
       p;                     // per depth pixel: x, y, z (bin), footprint half-width in cells (< 0: none)
   std::vector<Extent> band;  // per image-row band: extent of its valid points
+  std::vector<RowSpan> row;
 };
-void reserve_zbuffer_points(ZBufferPoints* pts, int pixels, int bands);
+void reserve_zbuffer_points(ZBufferPoints* pts, int width, int height, int bands);
 
 // Step 1, image rows [v0, v1) as band `band`: each valid pixel in the bin frame, with the
 // half-width of its footprint in buffer cells (so cells finer than the sensor's pixels are not
