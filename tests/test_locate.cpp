@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <Eigen/Dense>
 #include <cmath>
 #include <random>
 
@@ -69,6 +70,46 @@ TEST(Normals, CylinderTopFollowsTheSurface) {
   }
 }
 
+// Every cell against a plain least-squares fit of its window (brute force), on a row width that
+// leaves cells to the one-at-a-time path, with holes and an edge where windows run thin.
+TEST(Normals, EveryCellMatchesABruteForcePlaneFit) {
+  const double r = 12, cy = 31;
+  ZBuffer zb = synthetic_zbuffer(63, [&](double x, double y) {
+    const double dy = y - cy + 0.2 * x;
+    if (int(x * 7 + y * 3) % 17 == 0) return ZBuffer::kEmpty;  // scattered dropouts
+    return std::abs(dy) < r ? float(std::sqrt(r * r - dy * dy) + 0.05 * x) : ZBuffer::kEmpty;
+  });
+  const int window = 7, min_valid = 20, k = window / 2;
+  NormalMap nm;
+  reserve_normals(&nm, zb);
+  compute_normals(zb, window, min_valid, &nm);
+  int fitted = 0;
+  for (int j = 0; j < zb.height; ++j)
+    for (int i = 0; i < zb.width; ++i) {
+      Eigen::Matrix3d ata = Eigen::Matrix3d::Zero();
+      Eigen::Vector3d atz = Eigen::Vector3d::Zero();
+      int n = 0;
+      for (int v = j - k; v <= j + k; ++v)
+        for (int u = i - k; u <= i + k; ++u) {
+          if (u < 0 || v < 0 || u >= zb.width || v >= zb.height || std::isnan(zb.z.at(u, v))) continue;
+          const Eigen::Vector3d row(u, v, 1);
+          ata += row * row.transpose(), atz += row * double(zb.z.at(u, v)), ++n;
+        }
+      const Eigen::Vector3f got = nm.n.at(i, j);
+      if (std::isnan(zb.z.at(i, j)) || n < min_valid || std::abs(ata.determinant()) < 1e-6) {
+        if (std::isnan(zb.z.at(i, j)) || n < min_valid) {
+          EXPECT_EQ(got, Eigen::Vector3f::Zero()) << i << "," << j;
+        }
+        continue;
+      }
+      const Eigen::Vector3d abc = ata.ldlt().solve(atz);
+      const Eigen::Vector3d want = Eigen::Vector3d(-abc.x(), -abc.y(), 1).normalized();
+      EXPECT_LT((got.cast<double>() - want).norm(), 1e-4) << i << "," << j;
+      ++fitted;
+    }
+  EXPECT_GT(fitted, 63 * 10);
+}
+
 TEST(Normals, RowBandsGiveTheSameNormalsAsOnePass) {
   const double r = 10, cy = 30;
   ZBuffer zb = synthetic_zbuffer(60, [&](double x, double y) {
@@ -80,8 +121,7 @@ TEST(Normals, RowBandsGiveTheSameNormalsAsOnePass) {
   reserve_normals(&banded, zb, 3);
   compute_normals(zb, 7, 20, &one);
   const int cuts[] = {0, 17, 41, zb.height};
-  for (int b = 0; b < 3; ++b)
-    compute_normals_rows(zb, 7, 20, cuts[b], cuts[b + 1], b, &banded);
+  for (int b = 0; b < 3; ++b) compute_normals_rows(zb, 7, 20, cuts[b], cuts[b + 1], b, &banded);
   for (int j = 0; j < zb.height; ++j)
     for (int i = 0; i < zb.width; ++i)
       EXPECT_LT((one.n.at(i, j) - banded.n.at(i, j)).norm(), 1e-5f) << i << "," << j;
@@ -160,7 +200,8 @@ TEST(ZRidge, ColumnsGiveTheSameRidgeAsPoints) {
   for (const char* name : {"sbend", "u", "torus"}) {
     const LocatorModel lm = prepare_locator_model(preset_model(name), 8, cfg);
     RidgeBuffers rb;
-    reserve_ridge(&rb, lm.extent_l_mm + 2 * lm.tube_d_mm, float(cfg.ridge_cell_mm), int(lm.ridge_samples.size()));
+    reserve_ridge(&rb, lm.extent_l_mm + 2 * lm.tube_d_mm, float(cfg.ridge_cell_mm),
+                  int(lm.ridge_samples.size()));
     std::vector<Eigen::Vector3f> by_points(2000), by_columns(2000);
     for (const float cell : {float(cfg.ridge_cell_mm), float(cfg.icp_probe_cell_mm)}) {
       int ridge_points = 0;
@@ -365,8 +406,8 @@ TEST(ZBufferBuild, RowBandsOnThreadsGiveTheSameBufferAsOneBand) {
 }
 
 // For each pipe of the scene, how many of the given Z-buffer cells lie within tol_mm of its surface.
-std::vector<int> pipe_votes(const Locator& loc, const SimulatedScene& s,
-                            const int* cells, int n, float tol_mm) {
+std::vector<int> pipe_votes(const Locator& loc, const SimulatedScene& s, const int* cells, int n,
+                            float tol_mm) {
   std::vector<int> votes(s.model_to_world.size(), 0);
   const ZBuffer& zb = loc.zbuffer();
   for (int k = 0; k < n; ++k) {

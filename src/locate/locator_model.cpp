@@ -89,12 +89,13 @@ LocatorModel prepare_locator_model(const PipeModel& model, float margin_mm, cons
     lm.ridge_samples.push_back(pts[i]);
     lm.ridge_normals.push_back(model.surface.normals[i]);
   }
-  for (const float cell : {float(cfg.ridge_cell_mm), float(std::max(cfg.icp_probe_cell_mm, cfg.ridge_cell_mm))}) {
+  for (const float cell :
+       {float(cfg.ridge_cell_mm), float(std::max(cfg.icp_probe_cell_mm, cfg.ridge_cell_mm))}) {
     const int take = ridge_sample_stride(cell, cfg);
     if (lm.ridge_columns_for(take)) continue;
     lm.ridge_columns.emplace_back();
-    lm.ridge_columns.back().assign(lm.ridge_samples.data(), lm.ridge_normals.data(), int(lm.ridge_samples.size()),
-                                   take);
+    lm.ridge_columns.back().assign(lm.ridge_samples.data(), lm.ridge_normals.data(),
+                                   int(lm.ridge_samples.size()), take);
   }
   lm.verify_mesh = weld_vertices(model.mesh, std::max(0.5f, lm.tube_d_mm / 8));
   lm.verify_winding = closed_winding(model.mesh);

@@ -25,7 +25,7 @@ struct LocatorModel {
       if (c.stride == stride) return &c;
     return nullptr;
   }
-  std::vector<Eigen::Vector3f> check_points;   // vertices spread over the part, for pose distances
+  std::vector<Eigen::Vector3f> check_points;  // vertices spread over the part, for pose distances
   // The mesh verification renders: vertices merged on a grid of D/8 (within a pixel's footprint at
   // the bin's depth, several times fewer triangles to draw per hypothesis).
   Mesh verify_mesh;

@@ -1,9 +1,9 @@
 #include "locate/normals.hpp"
 
+#include <emmintrin.h>
+
 #include <algorithm>
 #include <cmath>
-
-#include <emmintrin.h>
 
 namespace pipeloc {
 namespace {
@@ -44,14 +44,16 @@ void accumulate(const ZBuffer& zb, int j, double sign, double* const* c) {
 // The plane fit of cells [i, i+4) of a row from their window sums: (-a, -b, 1) normalised (summed in
 // the order Eigen's normalized() sums it), or zero where the cell is empty, the window holds fewer
 // than min_n valid cells or the fit is degenerate. Four at a time, each lane as one cell alone.
-void fit_four(double* const* win, const float* z_row, int i, double min_n, double pixel, Eigen::Vector3f* out) {
+void fit_four(double* const* win, const float* z_row, int i, double min_n, double pixel,
+              Eigen::Vector3f* out) {
   __m128d mask_d[2];
   __m128 xy[2];
   for (int h = 0; h < 2; ++h) {
     const int at = i + 2 * h;
     const auto load = [&](int q) { return _mm_loadu_pd(win[q] + at); };
     const __m128d n = load(0), inv_n = _mm_div_pd(_mm_set1_pd(1.0), n);
-    const __m128d mi = _mm_mul_pd(load(1), inv_n), mj = _mm_mul_pd(load(2), inv_n), mz = _mm_mul_pd(load(6), inv_n);
+    const __m128d mi = _mm_mul_pd(load(1), inv_n), mj = _mm_mul_pd(load(2), inv_n),
+                  mz = _mm_mul_pd(load(6), inv_n);
     // Least squares in coordinates centred on the window's mean (well conditioned).
     const __m128d cii = _mm_sub_pd(_mm_mul_pd(load(3), inv_n), _mm_mul_pd(mi, mi));
     const __m128d cij = _mm_sub_pd(_mm_mul_pd(load(4), inv_n), _mm_mul_pd(mi, mj));
@@ -71,9 +73,9 @@ void fit_four(double* const* win, const float* z_row, int i, double min_n, doubl
   const __m128 x = _mm_shuffle_ps(xy[0], xy[1], _MM_SHUFFLE(2, 0, 2, 0));
   const __m128 y = _mm_shuffle_ps(xy[0], xy[1], _MM_SHUFFLE(3, 1, 3, 1));
   const __m128 z = _mm_loadu_ps(z_row + i);
-  const __m128 fitted = _mm_and_ps(
-      _mm_cmpord_ps(z, z),
-      _mm_shuffle_ps(_mm_castpd_ps(mask_d[0]), _mm_castpd_ps(mask_d[1]), _MM_SHUFFLE(2, 0, 2, 0)));
+  const __m128 fitted =
+      _mm_and_ps(_mm_cmpord_ps(z, z),
+                 _mm_shuffle_ps(_mm_castpd_ps(mask_d[0]), _mm_castpd_ps(mask_d[1]), _MM_SHUFFLE(2, 0, 2, 0)));
   const __m128 one = _mm_set1_ps(1.0f);
   const __m128 norm = _mm_sqrt_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(x, x), _mm_mul_ps(y, y)), one));
   alignas(16) float nx[4], ny[4], nz[4];
@@ -84,7 +86,8 @@ void fit_four(double* const* win, const float* z_row, int i, double min_n, doubl
 }
 
 // The same for one cell.
-void fit_one(double* const* win, const float* z_row, int i, double min_n, double pixel, Eigen::Vector3f* out) {
+void fit_one(double* const* win, const float* z_row, int i, double min_n, double pixel,
+             Eigen::Vector3f* out) {
   const double n = win[0][i];
   const double inv_n = 1 / n, mi = win[1][i] * inv_n, mj = win[2][i] * inv_n, mz = win[6][i] * inv_n;
   const double cii = win[3][i] * inv_n - mi * mi, cij = win[4][i] * inv_n - mi * mj,

@@ -15,8 +15,8 @@ struct CentreBox {
   int x0, x1, y0, y1;
   bool empty() const { return x0 > x1 || y0 > y1; }
 };
-CentreBox centre_box(const Eigen::Vector2d& s0, const Eigen::Vector2d& s1, const Eigen::Vector2d& s2, int width,
-                     int height) {
+CentreBox centre_box(const Eigen::Vector2d& s0, const Eigen::Vector2d& s1, const Eigen::Vector2d& s2,
+                     int width, int height) {
   return {std::max(0, int(std::ceil(std::min({s0.x(), s1.x(), s2.x()})))),
           std::min(width - 1, int(std::floor(std::max({s0.x(), s1.x(), s2.x()})))),
           std::max(0, int(std::ceil(std::min({s0.y(), s1.y(), s2.y()})))),
@@ -87,15 +87,14 @@ void draw_perspective(const Mesh& mesh, const ProjectedMesh& pm, const Intrinsic
     n.normalize();
     if (n.dot(p0) > 0) n = -n;  // face the camera: depth images see either side
     const double plane = n.dot(p0);
-    scan_triangle(s0, s1, s2, box,
-                  [&](int xr, int yr) {
-                    const int x = xr + x0, y = yr + y0;
-                    const Eigen::Vector3d ray((x - k.cx) / k.fx, (y - k.cy) / k.fy, 1.0);
-                    const double denom = n.dot(ray);
-                    if (std::abs(denom) < 1e-9) return;
-                    const float z = float(plane / denom);
-                    if (z > 0) on_pixel(x, y, z, n);
-                  });
+    scan_triangle(s0, s1, s2, box, [&](int xr, int yr) {
+      const int x = xr + x0, y = yr + y0;
+      const Eigen::Vector3d ray((x - k.cx) / k.fx, (y - k.cy) / k.fy, 1.0);
+      const double denom = n.dot(ray);
+      if (std::abs(denom) < 1e-9) return;
+      const float z = float(plane / denom);
+      if (z > 0) on_pixel(x, y, z, n);
+    });
   }
 }
 
