@@ -29,7 +29,7 @@ void accumulate(const ZBuffer& zb, int j, double sign, double* const* c) {
   const auto add = [](double* at, __m128d v) { _mm_storeu_pd(at, _mm_add_pd(_mm_loadu_pd(at), v)); };
   int i = 0;
   for (; i + 2 <= zb.width; i += 2) {
-    const __m128 zf = _mm_castpd_ps(_mm_load_sd(reinterpret_cast<const double*>(row + i)));
+    const __m128 zf = _mm_castsi128_ps(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(row + i)));
     const __m128 valid = _mm_cmpord_ps(zf, zf);
     const __m128d z = _mm_cvtps_pd(_mm_and_ps(valid, zf)), on = _mm_cvtps_pd(_mm_and_ps(valid, one));
     const __m128d vi = _mm_set_pd(i + 1, i), si = _mm_mul_pd(vs, vi);
