@@ -235,6 +235,37 @@ TEST(ZRidge, ColumnsGiveTheSameRidgeAsPoints) {
 
 // IV-B: from the paper's ranges (about the axis up to +-70 degrees, 3 cm along it) the ridge
 // ICP with refinement converges on the pipe.
+// Against brute force: the first of the closest points, on sets of 0 to 13 points (every tail
+// after the groups of four), drawn on a coarse grid so that ties are common.
+TEST(PointColumns, NearestIsTheFirstOfTheClosestAsBruteForce) {
+  std::mt19937 rng(7);
+  std::uniform_int_distribution<int> grid(-3, 3), near(-1, 1);
+  PointColumns columns;
+  columns.reserve(16);
+  int ties = 0;
+  for (int trial = 0; trial < 400; ++trial) {
+    const int n = trial % 14;
+    std::vector<Eigen::Vector3f> pts;
+    for (int k = 0; k < n; ++k) pts.emplace_back(float(near(rng)), float(near(rng)), 0.5f * float(near(rng)));
+    ASSERT_TRUE(columns.assign(pts.data(), n));
+    const Eigen::Vector3f q(float(grid(rng)) + 0.5f, float(grid(rng)), 0.25f * float(grid(rng)));
+    int want = -1, at_least = 0;
+    float want_d2 = 1e30f;
+    for (int k = 0; k < n; ++k) {
+      const float d2 = (pts[std::size_t(k)] - q).squaredNorm();
+      if (d2 < want_d2) want_d2 = d2, want = k;
+    }
+    for (int k = 0; k < n; ++k) at_least += (pts[std::size_t(k)] - q).squaredNorm() == want_d2;
+    ties += at_least > 1;
+    float got_d2 = 0;
+    EXPECT_EQ(columns.nearest(q, &got_d2), want) << "trial " << trial;
+    if (want >= 0) {
+      EXPECT_EQ(got_d2, want_d2) << "trial " << trial;
+    }
+  }
+  EXPECT_GT(ties, 20);  // the tie-break was put to the test
+}
+
 TEST(RidgeIcp, ConvergesFromThePapersRanges) {
   OnePipe s = one_pipe("sbend", 4);
   const PipeModel& model = preset_model("sbend");

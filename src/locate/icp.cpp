@@ -21,28 +21,6 @@ int nearest(const Eigen::Vector3f& q, const Eigen::Vector3f* pts, int n, float* 
   return best;
 }
 
-// The same on columns: the distances in one pass the compiler vectorizes, their minimum four at
-// a time, then the first point at that distance. Same sums in the same order, same answer.
-int nearest(const Eigen::Vector3f& q, PointColumns* c, float* d2) {
-  const int n = c->n;
-  const float qx = q.x(), qy = q.y(), qz = q.z();
-  const float *x = c->x.data(), *y = c->y.data(), *z = c->z.data();
-  float* d = c->d2.data();
-  for (int i = 0; i < n; ++i) {
-    const float dx = x[i] - qx, dy = y[i] - qy, dz = z[i] - qz;
-    d[i] = dx * dx + dy * dy + dz * dz;
-  }
-  __m128 low4 = _mm_set1_ps(1e30f);
-  int i = 0;
-  for (; i + 4 <= n; i += 4) low4 = _mm_min_ps(low4, _mm_loadu_ps(d + i));
-  alignas(16) float lanes[4];
-  _mm_store_ps(lanes, low4);
-  float low = std::min(std::min(lanes[0], lanes[1]), std::min(lanes[2], lanes[3]));
-  for (; i < n; ++i) low = std::min(low, d[i]);
-  *d2 = low;
-  return low < 1e30f ? int(std::find(d, d + n, low) - d) : -1;
-}
-
 int model_ridge(const LocatorModel& lm, const Pose& pose, const Eigen::Vector2f& axis, float cell_mm,
                 const LocateConfig& cfg, IcpBuffers* buf) {
   PosedPoints samples;
@@ -61,11 +39,11 @@ int model_ridge(const LocatorModel& lm, const Pose& pose, const Eigen::Vector2f&
 struct SearchSet {
   const Eigen::Vector3f* p;
   int n;
-  PointColumns* columns;  // null: not laid out (more points than reserved for)
+  const PointColumns* columns;  // null: not laid out (more points than reserved for)
   SearchSet(const Eigen::Vector3f* points, int count, PointColumns* cols)
       : p(points), n(count), columns(cols->assign(points, count) ? cols : nullptr) {}
   int nearest_to(const Eigen::Vector3f& q, float* d2) const {
-    return columns ? nearest(q, columns, d2) : nearest(q, p, n, d2);
+    return columns ? columns->nearest(q, d2) : nearest(q, p, n, d2);
   }
 };
 
@@ -86,11 +64,46 @@ float truncated_mean(const Eigen::Vector3f* a, int na, const SearchSet& b, float
 
 }  // namespace
 
+// nearest() on columns, four points at a time: each lane keeps its least distance and the first
+// point at it; the lanes then give the least, and of the points at it the first. Same sums in the
+// same order, same answer.
+int PointColumns::nearest(const Eigen::Vector3f& q, float* d2) const {
+  const float *xs = x.data(), *ys = y.data(), *zs = z.data();
+  const __m128 qx = _mm_set1_ps(q.x()), qy = _mm_set1_ps(q.y()), qz = _mm_set1_ps(q.z());
+  __m128 low4 = _mm_set1_ps(1e30f);
+  __m128i at4 = _mm_set1_epi32(-1), index4 = _mm_setr_epi32(0, 1, 2, 3);
+  const __m128i four = _mm_set1_epi32(4);
+  int i = 0;
+  for (; i + 4 <= n; i += 4, index4 = _mm_add_epi32(index4, four)) {
+    const __m128 dx = _mm_sub_ps(_mm_loadu_ps(xs + i), qx), dy = _mm_sub_ps(_mm_loadu_ps(ys + i), qy),
+                 dz = _mm_sub_ps(_mm_loadu_ps(zs + i), qz);
+    const __m128 d = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz));
+    const __m128i closer = _mm_castps_si128(_mm_cmplt_ps(d, low4));
+    low4 = _mm_min_ps(d, low4);
+    at4 = _mm_or_si128(_mm_and_si128(closer, index4), _mm_andnot_si128(closer, at4));
+  }
+  alignas(16) float lanes[4];
+  alignas(16) int lane_at[4];
+  _mm_store_ps(lanes, low4);
+  _mm_store_si128(reinterpret_cast<__m128i*>(lane_at), at4);
+  float low = 1e30f;
+  int best = -1;
+  for (int l = 0; l < 4; ++l)
+    if (lanes[l] < low || (lanes[l] == low && lane_at[l] >= 0 && lane_at[l] < best))
+      low = lanes[l], best = lane_at[l];
+  for (; i < n; ++i) {  // the last few lie after every lane's
+    const float dx = xs[i] - q.x(), dy = ys[i] - q.y(), dz = zs[i] - q.z();
+    const float d = dx * dx + dy * dy + dz * dz;
+    if (d < low) low = d, best = i;
+  }
+  *d2 = low;
+  return low < 1e30f ? best : -1;
+}
+
 void PointColumns::reserve(int capacity) {
   x.assign(std::size_t(capacity), 0.0f);
   y.assign(std::size_t(capacity), 0.0f);
   z.assign(std::size_t(capacity), 0.0f);
-  d2.assign(std::size_t(capacity), 0.0f);
   n = 0;
 }
 

@@ -28,11 +28,12 @@ struct TopDistance {
 // A point set laid out by coordinate, for nearest-point scans four points at a time.
 struct PointColumns {
   std::vector<float> x, y, z;
-  std::vector<float> d2;  // scratch: squared distance of each point to the query
   int n = 0;
   void reserve(int capacity);
   // false (and nothing assigned) if count exceeds the capacity reserved
   bool assign(const Eigen::Vector3f* points, int count);
+  // The first of the points closest to q (-1 if none), its squared distance in d2.
+  int nearest(const Eigen::Vector3f& q, float* d2) const;
 };
 
 struct IcpBuffers {
@@ -110,8 +111,8 @@ RidgeFit ridge_icp(const LocatorModel& lm, const Pose& start, const Eigen::Vecto
 // ridge_icp without its closing evaluation: pose, iterations and gate_mm only (the cost and
 // match counts stay unset), for a run another continues from at once.
 RidgeFit ridge_icp_steps(const LocatorModel& lm, const Pose& start, const Eigen::Vector3f* observed_ridge,
-                         int n_observed, const Eigen::Vector2f& axis, const LocateConfig& cfg, int max_iterations,
-                         IcpBuffers* buf, float gate_mm = -1, float cell_mm = -1,
+                         int n_observed, const Eigen::Vector2f& axis, const LocateConfig& cfg,
+                         int max_iterations, IcpBuffers* buf, float gate_mm = -1, float cell_mm = -1,
                          const Eigen::Vector3f* start_ridge = nullptr, int start_ridge_count = 0);
 
 struct RefineResult {

@@ -1,10 +1,10 @@
 #include "locate/zridge.hpp"
 
+#include <emmintrin.h>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
-
-#include <emmintrin.h>
 
 namespace pipeloc {
 
@@ -94,8 +94,10 @@ Span project_columns(const OrientedColumns& c, const Eigen::Matrix3f& to_uvz, co
     const auto pick = [&](__m128 a, __m128 other) {
       return _mm_or_ps(_mm_and_ps(kept, a), _mm_andnot_ps(kept, other));
     };
-    lo_u = _mm_min_ps(lo_u, pick(u, _mm_set1_ps(1e30f))), hi_u = _mm_max_ps(hi_u, pick(u, _mm_set1_ps(-1e30f)));
-    lo_v = _mm_min_ps(lo_v, pick(v, _mm_set1_ps(1e30f))), hi_v = _mm_max_ps(hi_v, pick(v, _mm_set1_ps(-1e30f)));
+    lo_u = _mm_min_ps(lo_u, pick(u, _mm_set1_ps(1e30f))),
+    hi_u = _mm_max_ps(hi_u, pick(u, _mm_set1_ps(-1e30f)));
+    lo_v = _mm_min_ps(lo_v, pick(v, _mm_set1_ps(1e30f))),
+    hi_v = _mm_max_ps(hi_v, pick(v, _mm_set1_ps(-1e30f)));
     _mm_store_ps(lane_u, u), _mm_store_ps(lane_v, v), _mm_store_ps(lane_z, h);
     // Every lane is written at the next free place; only a kept one moves it on.
     for (int j = 0; j < 4; ++j) {
@@ -200,7 +202,8 @@ int extract_zridge(const PosedPoints& pts, const Eigen::Vector2f& axis, float ce
     const int k = rb->top_i[cell_index];
     if (!by_columns) return Eigen::Vector3f(r * pts.points[k] + t);
     const OrientedColumns& c = *pts.columns;
-    return Eigen::Vector3f(r * Eigen::Vector3f(c.x[std::size_t(k)], c.y[std::size_t(k)], c.z[std::size_t(k)]) + t);
+    return Eigen::Vector3f(
+        r * Eigen::Vector3f(c.x[std::size_t(k)], c.y[std::size_t(k)], c.z[std::size_t(k)]) + t);
   };
   int n = 0;
   const int min_run = std::max(1, int(min_run_mm / cell));
