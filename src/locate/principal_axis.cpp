@@ -6,6 +6,8 @@
 namespace pipeloc {
 
 void reserve_axis(AxisBuffers* buf, int max_cells, int w, int h) {
+  buf->column.assign(std::size_t(max_cells), 0.0f);
+  buf->row.assign(std::size_t(max_cells), 0.0f);
   buf->line.assign(std::size_t(max_cells), 0);
   buf->along.assign(std::size_t(max_cells), 0);
   buf->sorted.assign(std::size_t(max_cells), 0);
@@ -14,17 +16,16 @@ void reserve_axis(AxisBuffers* buf, int max_cells, int w, int h) {
   buf->by_along.assign(std::size_t(4 * (w + h) + 8), 0);  // so do positions along them, in quarter cells
 }
 
-int count_sections(const ZBuffer& zb, const int* cells, int count, float theta, float min_w, float max_w,
-                   AxisBuffers* buf) {
+int count_sections(const float* column, const float* row, int count, float pixel_mm, float theta, float min_w,
+                   float max_w, AxisBuffers* buf) {
   // Scan lines run along (cos, sin), one cell apart. Cells are ordered along the scan direction,
   // then grouped by line keeping that order (two counting sorts), so consecutive entries of a
   // line form runs.
   const float c = std::cos(theta), s = std::sin(theta);
-  const int w = zb.z.width;
-  const float p = float(zb.pixel_mm);
+  const float p = pixel_mm;
   int lmin = 1 << 30, lmax = -(1 << 30), amin = 1 << 30, amax = -(1 << 30);
   for (int k = 0; k < count; ++k) {
-    const float x = float(cells[k] % w), y = float(cells[k] / w);
+    const float x = column[k], y = row[k];
     const int line = int(round_nearest(-x * s + y * c));
     const int along = int(round_nearest((x * c + y * s) * 4));  // quarter cells
     buf->line[std::size_t(k)] = line;
@@ -76,16 +77,21 @@ AxisEstimate estimate_axis(const ZBuffer& zb, const int* cells, int count,
   const float min_w = float(cfg.section_width_min_of_d) * d, max_w = float(cfg.section_width_max_of_d) * d;
   const float step = float(cfg.scan_step_deg * M_PI / 180.0);
   float best_theta = 0;
+  // The cells' buffer coordinates, once for every scan direction.
+  const int w = zb.z.width;
+  const float pixel_mm = float(zb.pixel_mm);
+  float *column = buf->column.data(), *row = buf->row.data();
+  for (int k = 0; k < count; ++k) column[k] = float(cells[k] % w), row[k] = float(cells[k] / w);
   // Coarse pass at four times the step, then twice the step and the step either side of the
   // best (13 scans for 5 degrees instead of 36).
   for (float theta = 0; theta < float(M_PI) - 1e-4f; theta += 4 * step) {
-    const int n = count_sections(zb, cells, count, theta, min_w, max_w, buf);
+    const int n = count_sections(column, row, count, pixel_mm, theta, min_w, max_w, buf);
     if (n > est.best_count) est.best_count = n, best_theta = theta;
   }
   for (const float delta : {2 * step, step}) {
     const float centre = best_theta;
     for (const float theta : {centre - delta, centre + delta}) {
-      const int n = count_sections(zb, cells, count, theta, min_w, max_w, buf);
+      const int n = count_sections(column, row, count, pixel_mm, theta, min_w, max_w, buf);
       if (n > est.best_count) est.best_count = n, best_theta = theta;
     }
   }
@@ -93,7 +99,6 @@ AxisEstimate estimate_axis(const ZBuffer& zb, const int* cells, int count,
   // The scan direction with most pipe-wide sections is perpendicular to the axis.
   est.axis = Eigen::Vector2f(-std::sin(best_theta), std::cos(best_theta));
   // Initial position: the middle of the region's extent along the line through the core centroid.
-  const int w = zb.z.width;
   float lo = 1e30f, hi = -1e30f, z_sum = 0;
   int near = 0;
   const Eigen::Vector2f c2 = core_centroid.head<2>();

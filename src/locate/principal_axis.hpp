@@ -18,19 +18,20 @@ struct AxisEstimate {
 };
 
 struct AxisBuffers {
-  std::vector<int> line, along;  // per region cell; capacity: the largest region
-  std::vector<int> start;        // per scan line: where its cells begin in `sorted`
-  std::vector<int> by_along;     // per along-position (quarter cells): where its cells begin in `order`
-  std::vector<int> order;        // cells in order along the scan direction
-  std::vector<int> sorted;       // cells' along-positions grouped by line, in order along each
+  std::vector<float> column, row;  // per region cell: its buffer coordinates; capacity: the largest region
+  std::vector<int> line, along;    // per region cell, per scan direction
+  std::vector<int> start;          // per scan line: where its cells begin in `sorted`
+  std::vector<int> by_along;       // per along-position (quarter cells): where its cells begin in `order`
+  std::vector<int> order;          // cells in order along the scan direction
+  std::vector<int> sorted;         // cells' along-positions grouped by line, in order along each
 };
 // Sizes the buffers for regions of up to max_cells cells of a Z-buffer up to w x h cells.
 void reserve_axis(AxisBuffers* buf, int max_cells, int w, int h);
 
-// Number of runs ("cross-sections") of region cells along scan lines in direction theta whose
-// width lies in [min_w, max_w] mm.
-int count_sections(const ZBuffer& zb, const int* cells, int count, float theta_rad, float min_w, float max_w,
-                   AxisBuffers* buf);
+// Number of runs ("cross-sections") of region cells (buffer columns and rows, cells of pixel_mm)
+// along scan lines in direction theta whose width lies in [min_w, max_w] mm.
+int count_sections(const float* column, const float* row, int count, float pixel_mm, float theta_rad,
+                   float min_w, float max_w, AxisBuffers* buf);
 
 AxisEstimate estimate_axis(const ZBuffer& zb, const int* cells, int count,
                            const Eigen::Vector3f& core_centroid, const LocateConfig& cfg, float tube_d_mm,
