@@ -12,7 +12,7 @@
 namespace pipeloc {
 
 // Round to nearest without a libm call (hot loops over every pixel and cell).
-inline long round_nearest(float v) { return long(v + (v >= 0 ? 0.5f : -0.5f)); }
+inline long round_nearest(float v) { return long(v + std::copysign(0.5f, v)); }
 
 struct ZBuffer {
   double origin_x_mm = 0, origin_y_mm = 0;  // centre of cell (0, 0)
