@@ -10,36 +10,21 @@ double edge(const Eigen::Vector2d& a, const Eigen::Vector2d& b, double x, double
   return (b.x() - a.x()) * (y - a.y()) - (b.y() - a.y()) * (x - a.x());
 }
 
-// The integer pixel centres a screen triangle's bounds hold, within width x height.
-struct CentreBox {
-  int x0, x1, y0, y1;
-  bool empty() const { return x0 > x1 || y0 > y1; }
-};
-CentreBox centre_box(const Eigen::Vector2d& s0, const Eigen::Vector2d& s1, const Eigen::Vector2d& s2,
-                     int width, int height) {
-  return {std::max(0, int(std::ceil(std::min({s0.x(), s1.x(), s2.x()})))),
-          std::min(width - 1, int(std::floor(std::max({s0.x(), s1.x(), s2.x()})))),
-          std::max(0, int(std::ceil(std::min({s0.y(), s1.y(), s2.y()})))),
-          std::min(height - 1, int(std::floor(std::max({s0.y(), s1.y(), s2.y()}))))};
-}
-
-// Visits the integer pixel centres of `box` inside the screen triangle s0 s1 s2 (either winding).
-template <typename Visit>
-void scan_triangle(const Eigen::Vector2d& s0, const Eigen::Vector2d& s1, const Eigen::Vector2d& s2,
-                   const CentreBox& box, Visit visit) {
-  const double area = edge(s0, s1, s2.x(), s2.y());
-  if (std::abs(area) < 1e-12) return;
-  const double sign = area > 0 ? 1.0 : -1.0;
-  for (int y = box.y0; y <= box.y1; ++y)
-    for (int x = box.x0; x <= box.x1; ++x)
-      if (sign * edge(s1, s2, x, y) >= 0 && sign * edge(s2, s0, x, y) >= 0 && sign * edge(s0, s1, x, y) >= 0)
-        visit(x, y);
-}
-
+// Visits the integer pixel centres inside the screen triangle s0 s1 s2 (either winding).
 template <typename Visit>
 void scan_triangle(const Eigen::Vector2d& s0, const Eigen::Vector2d& s1, const Eigen::Vector2d& s2, int width,
                    int height, Visit visit) {
-  scan_triangle(s0, s1, s2, centre_box(s0, s1, s2, width, height), visit);
+  const double area = edge(s0, s1, s2.x(), s2.y());
+  if (std::abs(area) < 1e-12) return;
+  const double sign = area > 0 ? 1.0 : -1.0;
+  const int x0 = std::max(0, int(std::ceil(std::min({s0.x(), s1.x(), s2.x()}))));
+  const int x1 = std::min(width - 1, int(std::floor(std::max({s0.x(), s1.x(), s2.x()}))));
+  const int y0 = std::max(0, int(std::ceil(std::min({s0.y(), s1.y(), s2.y()}))));
+  const int y1 = std::min(height - 1, int(std::floor(std::max({s0.y(), s1.y(), s2.y()}))));
+  for (int y = y0; y <= y1; ++y)
+    for (int x = x0; x <= x1; ++x)
+      if (sign * edge(s1, s2, x, y) >= 0 && sign * edge(s2, s0, x, y) >= 0 && sign * edge(s0, s1, x, y) >= 0)
+        visit(x, y);
 }
 
 }  // namespace
@@ -79,22 +64,19 @@ void draw_perspective(const Mesh& mesh, const ProjectedMesh& pm, const Intrinsic
     if (p0.z() <= 1 || p1.z() <= 1 || p2.z() <= 1) continue;  // behind or at the lens
     Eigen::Vector3d n = (p1 - p0).cross(p2 - p0);
     if (away * n.dot(p0) > 0) continue;
-    // Faces smaller than a pixel often hold no pixel centre: known before their plane is worked out.
-    const Eigen::Vector2d s0 = pm.px[f[0]] - corner, s1 = pm.px[f[1]] - corner, s2 = pm.px[f[2]] - corner;
-    const CentreBox box = centre_box(s0, s1, s2, x1 - x0 + 1, y1 - y0 + 1);
-    if (box.empty()) continue;
     if (n.norm() < 1e-12) continue;
     n.normalize();
     if (n.dot(p0) > 0) n = -n;  // face the camera: depth images see either side
     const double plane = n.dot(p0);
-    scan_triangle(s0, s1, s2, box, [&](int xr, int yr) {
-      const int x = xr + x0, y = yr + y0;
-      const Eigen::Vector3d ray((x - k.cx) / k.fx, (y - k.cy) / k.fy, 1.0);
-      const double denom = n.dot(ray);
-      if (std::abs(denom) < 1e-9) return;
-      const float z = float(plane / denom);
-      if (z > 0) on_pixel(x, y, z, n);
-    });
+    scan_triangle(pm.px[f[0]] - corner, pm.px[f[1]] - corner, pm.px[f[2]] - corner, x1 - x0 + 1, y1 - y0 + 1,
+                  [&](int xr, int yr) {
+                    const int x = xr + x0, y = yr + y0;
+                    const Eigen::Vector3d ray((x - k.cx) / k.fx, (y - k.cy) / k.fy, 1.0);
+                    const double denom = n.dot(ray);
+                    if (std::abs(denom) < 1e-9) return;
+                    const float z = float(plane / denom);
+                    if (z > 0) on_pixel(x, y, z, n);
+                  });
   }
 }
 
