@@ -12,24 +12,21 @@ constexpr int kSums = 9;  // n, Si, Sj, Sii, Sij, Sjj, Sz, Siz, Sjz
 
 // Adds (sign +1) or removes (-1) row j to the column sums, one array per sum, two cells at a time.
 // An empty cell adds zeros, which leave every sum as it was; each term is the product, in the same
-// order, that a cell at a time would add.
+// order, that a cell at a time would add. An odd last cell goes as a pair whose second is empty
+// and not stored.
 void accumulate(const ZBuffer& zb, int j, double sign, double* const* c) {
   if (j < 0 || j >= zb.height) return;
   const float* row = &zb.z.at(0, j);
-  const auto cell = [&](int i) {
-    const bool valid = !std::isnan(row[i]);
-    const double on = valid ? 1.0 : 0.0, z = valid ? double(row[i]) : 0.0;
-    c[0][i] += sign * on, c[1][i] += sign * i * on, c[2][i] += sign * j * on;
-    c[3][i] += sign * i * i * on, c[4][i] += sign * i * j * on, c[5][i] += sign * j * j * on;
-    c[6][i] += sign * z, c[7][i] += sign * i * z, c[8][i] += sign * j * z;
-  };
   const __m128d vs = _mm_set1_pd(sign), vj = _mm_set1_pd(j), sj = _mm_set1_pd(sign * j),
                 sjj = _mm_set1_pd(sign * j * j);
   const __m128 one = _mm_set1_ps(1.0f);
-  const auto add = [](double* at, __m128d v) { _mm_storeu_pd(at, _mm_add_pd(_mm_loadu_pd(at), v)); };
-  int i = 0;
-  for (; i + 2 <= zb.width; i += 2) {
-    const __m128 zf = _mm_castsi128_ps(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(row + i)));
+  const auto pair = [&](int i, __m128 zf, bool both) {
+    const auto add = [both](double* at, __m128d v) {
+      if (both)
+        _mm_storeu_pd(at, _mm_add_pd(_mm_loadu_pd(at), v));
+      else
+        _mm_store_sd(at, _mm_add_sd(_mm_load_sd(at), v));
+    };
     const __m128 valid = _mm_cmpord_ps(zf, zf);
     const __m128d z = _mm_cvtps_pd(_mm_and_ps(valid, zf)), on = _mm_cvtps_pd(_mm_and_ps(valid, one));
     const __m128d vi = _mm_set_pd(i + 1, i), si = _mm_mul_pd(vs, vi);
@@ -37,8 +34,11 @@ void accumulate(const ZBuffer& zb, int j, double sign, double* const* c) {
     add(c[3] + i, _mm_mul_pd(_mm_mul_pd(si, vi), on)), add(c[4] + i, _mm_mul_pd(_mm_mul_pd(si, vj), on));
     add(c[5] + i, _mm_mul_pd(sjj, on));
     add(c[6] + i, _mm_mul_pd(vs, z)), add(c[7] + i, _mm_mul_pd(si, z)), add(c[8] + i, _mm_mul_pd(sj, z));
-  }
-  for (; i < zb.width; ++i) cell(i);
+  };
+  int i = 0;
+  for (; i + 2 <= zb.width; i += 2)
+    pair(i, _mm_castsi128_ps(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(row + i))), true);
+  if (i < zb.width) pair(i, _mm_setr_ps(row[i], ZBuffer::kEmpty, 0, 0), false);
 }
 
 // The plane fit of cells [i, i+4) of a row from their window sums: (-a, -b, 1) normalised (summed in
@@ -85,21 +85,20 @@ void fit_four(double* const* win, const float* z_row, int i, double min_n, doubl
   for (int l = 0; l < 4; ++l) out[i + l] = Eigen::Vector3f(nx[l], ny[l], nz[l]);
 }
 
-// The same for one cell.
-void fit_one(double* const* win, const float* z_row, int i, double min_n, double pixel,
-             Eigen::Vector3f* out) {
-  const double n = win[0][i];
-  const double inv_n = 1 / n, mi = win[1][i] * inv_n, mj = win[2][i] * inv_n, mz = win[6][i] * inv_n;
-  const double cii = win[3][i] * inv_n - mi * mi, cij = win[4][i] * inv_n - mi * mj,
-               cjj = win[5][i] * inv_n - mj * mj;
-  const double ciz = win[7][i] * inv_n - mi * mz, cjz = win[8][i] * inv_n - mj * mz;
-  const double det = cii * cjj - cij * cij;
-  const double inv_det = 1 / det;
-  const double a = (ciz * cjj - cjz * cij) * inv_det, b = (cjz * cii - ciz * cij) * inv_det;
-  const float x = float(-a / pixel), y = float(-b / pixel);
-  const float norm = std::sqrt(x * x + y * y + 1.0f);
-  const bool fitted = !std::isnan(z_row[i]) && n >= min_n && det >= 1e-9;
-  out[i] = fitted ? Eigen::Vector3f(x / norm, y / norm, 1.0f / norm) : Eigen::Vector3f::Zero();
+// The last cells of a row (fewer than four) through fit_four, on copies padded with empty cells.
+void fit_tail(double* const* win, const float* z_row, int i, int w, double min_n, double pixel,
+              Eigen::Vector3f* out) {
+  double pad[kSums][4] = {};
+  double* pad_win[kSums];
+  float pad_z[4] = {ZBuffer::kEmpty, ZBuffer::kEmpty, ZBuffer::kEmpty, ZBuffer::kEmpty};
+  Eigen::Vector3f pad_out[4];
+  for (int q = 0; q < kSums; ++q) {
+    pad_win[q] = pad[q];
+    for (int l = 0; i + l < w; ++l) pad[q][l] = win[q][i + l];
+  }
+  for (int l = 0; i + l < w; ++l) pad_z[l] = z_row[i + l];
+  fit_four(pad_win, pad_z, 0, min_n, pixel, pad_out);
+  for (int l = 0; i + l < w; ++l) out[i + l] = pad_out[l];
 }
 
 }  // namespace
@@ -141,7 +140,7 @@ void compute_normals_rows(const ZBuffer& zb, int window, int min_valid, int j0, 
     Eigen::Vector3f* out = &nm->n.at(0, j);
     int i = 0;
     for (; i + 4 <= w; i += 4) fit_four(win, zr, i, min_n, zb.pixel_mm, out);
-    for (; i < w; ++i) fit_one(win, zr, i, min_n, zb.pixel_mm, out);
+    if (i < w) fit_tail(win, zr, i, w, min_n, zb.pixel_mm, out);
   }
 }
 
