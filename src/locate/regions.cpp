@@ -112,6 +112,9 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
   Core cores[kMaxCores];
   int n_cores = 0;
   // The cells marked `mark` connected to (i, j), appended to the pool (and unmarked).
+  // Offsets of the 8 neighbours in the buffers' pixels (the label image has the Z-buffer's width).
+  int neighbour[8];
+  for (int k = 0; k < 8; ++k) neighbour[k] = kDj[k] * w + kDi[k];
   const auto label = [&](int i, int j, std::uint8_t mark) {
     const int begin = pool;
     CellBox box;
@@ -120,14 +123,18 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
     rb->core_cells[pool++] = zb.index(i, j);
     for (int head = begin; head < pool; ++head) {
       const int ci = column_of(rb->queue[head]), cj = row_of(rb->queue[head]);
-      box.add(ci, cj, zb.z.pixels[std::size_t(rb->core_cells[head])]);
+      const int at = rb->core_cells[head];
+      box.add(ci, cj, zb.z.pixels[std::size_t(at)]);
+      // Away from the edges every neighbour exists: no bounds tests.
+      const bool inside = ci > 0 && cj > 0 && ci + 1 < zb.width && cj + 1 < zb.height;
       for (int k = 0; k < 8; ++k) {
         const int ni = ci + kDi[k], nj = cj + kDj[k];
-        if (ni < 0 || nj < 0 || ni >= zb.width || nj >= zb.height) continue;
-        if (open.at(ni, nj) != mark) continue;
-        open.at(ni, nj) = 0;
+        if (!inside && (ni < 0 || nj < 0 || ni >= zb.width || nj >= zb.height)) continue;
+        const int q = at + neighbour[k];
+        if (open.pixels[std::size_t(q)] != mark) continue;
+        open.pixels[std::size_t(q)] = 0;
         rb->queue[pool] = pack(ni, nj);
-        rb->core_cells[pool++] = zb.index(ni, nj);
+        rb->core_cells[pool++] = q;
       }
     }
     return box;
@@ -208,8 +215,6 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
   });
 
   // 2. Grow each core while the normal of a neighbour is close to that of the boundary cell.
-  int neighbour[8];  // offsets of the 8 neighbours in the buffers' pixels
-  for (int k = 0; k < 8; ++k) neighbour[k] = kDj[k] * w + kDi[k];
   int region_pool = 0;
   const int claim = ++rb->claim_value;
   // How many of the cells lie in regions already handed out.
