@@ -232,43 +232,47 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
     }
     // Growth is first held to region_max_reach_of_d * D from the core: a pipe's visible surface
     // lies within about D/2 of its top strip, and a touching pipe then adds a band, not itself.
-    // A region too short that way (a top strip broken into pieces) is grown again without the
+    // A region too short that way (a top strip broken into pieces) is grown on without the
     // limit, the paper's growth, and kept if it then neither leaks nor stays short.
     int* cells = &rb->region_cells[region_pool];
     int count = 0;
+    const int stamp = ++rb->stamp_value;
     Eigen::Vector3f centroid = Eigen::Vector3f::Zero();
+    CellBox box;
+    for (int k = cores[c].begin; k < cores[c].end && count < rb->max_region_cells; ++k) {
+      rb->grow_queue[count] = rb->queue[k];
+      cells[count++] = rb->core_cells[k];
+      rb->stamp.pixels[rb->core_cells[k]] = stamp;
+      rb->ridge_z.pixels[rb->core_cells[k]] = zb.z.pixels[rb->core_cells[k]];
+      rb->reach.pixels[rb->core_cells[k]] = 0;
+      centroid += zb.point(rb->core_cells[k] % w, rb->core_cells[k] / w);
+    }
+    centroid /= float(core_count);
+    bool leaked = false;
+    int ring_cells = 0, ring_lower = 0;
+    // A pipe's top is convex: the cells grown straight from its core tilt away from it. A patch of
+    // floor between pipes grows up their sides instead. Known once the core's cells are worked.
+    const auto convex = [&] {
+      return ring_cells > 0 && float(ring_lower) >= float(cfg.convexity_min_share) * float(ring_cells);
+    };
+    const bool split = cores[c].split;
+    // The queue is breadth-first, in order of reach: the cells the first pass did not grow from
+    // are its last ones. Growing on from the first of them is the unlimited growth from scratch.
+    int held_back = -1;
     bool found = false;
     for (int pass = 0; pass < 2 && !found; ++pass) {
       const int reach_limit = pass == 0 ? reach_max : std::numeric_limits<int>::max() - 1;
-      const int stamp = ++rb->stamp_value;
-      count = 0;
-      centroid = Eigen::Vector3f::Zero();
-      CellBox box;
-      for (int k = cores[c].begin; k < cores[c].end && count < rb->max_region_cells; ++k) {
-        rb->grow_queue[count] = rb->queue[k];
-        cells[count++] = rb->core_cells[k];
-        rb->stamp.pixels[rb->core_cells[k]] = stamp;
-        rb->ridge_z.pixels[rb->core_cells[k]] = zb.z.pixels[rb->core_cells[k]];
-        rb->reach.pixels[rb->core_cells[k]] = 0;
-        centroid += zb.point(rb->core_cells[k] % w, rb->core_cells[k] / w);
-      }
-      centroid /= float(core_count);
-      bool leaked = false;
-      int ring_cells = 0, ring_lower = 0;
-      // A pipe's top is convex: the cells grown straight from its core tilt away from it. A patch of
-      // floor between pipes grows up their sides instead. Known once the core's cells are worked.
-      const auto convex = [&] {
-        return ring_cells > 0 && float(ring_lower) >= float(cfg.convexity_min_share) * float(ring_cells);
-      };
-      const bool split = cores[c].split;
-      for (int head = 0; head < count; ++head) {
+      for (int head = pass == 0 ? 0 : held_back; head < count; ++head) {
         const int ci = column_of(rb->grow_queue[head]), cj = row_of(rb->grow_queue[head]);
         const int at = cells[head];
         const Eigen::Vector3f ni_n = nm.n.pixels[std::size_t(at)];
         const float zi = zb.z.pixels[std::size_t(at)];
         box.add(ci, cj, zi);
         const int reach = rb->reach.pixels[std::size_t(at)] + 1;
-        if (reach > reach_limit) continue;
+        if (reach > reach_limit) {
+          if (held_back < 0) held_back = head;
+          continue;
+        }
         // The visible part of a pipe lies within about one diameter below its top: growth does
         // not follow a smoothed edge down onto the floor or the pipe beneath.
         const float top = rb->ridge_z.pixels[std::size_t(at)];
@@ -304,6 +308,7 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
       if (!convex()) break;
       // 3. Keep regions longer than a * L.
       found = box.longer_than(float(cfg.region_min_extent_of_l) * l, zb, cells, count);
+      if (held_back < 0) break;  // the limit held nothing back: growing on adds nothing
     }
     if (!found) continue;
     // A region lying mostly in earlier ones is another piece of a pipe already taken up (a top
