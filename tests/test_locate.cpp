@@ -191,6 +191,31 @@ TEST(ZRidge, OfAHorizontalCylinderIsItsTopLine) {
   }
 }
 
+// Points are binned four at a time when the buffers hold them all, one at a time when not: the
+// same ridge either way, also when the grid is smaller than the points' span and drops some.
+TEST(ZRidge, BinnedFourAtATimeAsOneAtATime) {
+  const float radius = 10, length = 300;
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> u(-1, 1);
+  std::vector<Eigen::Vector3f> pts;
+  for (int k = 0; k < 20003; ++k) {  // not a multiple of four
+    const float s = (u(rng) + 1) * length / 2, a = u(rng) * float(M_PI);
+    pts.emplace_back(s, radius * std::cos(a) + 0.2f * s, 500 + radius * std::sin(a));
+  }
+  for (const float extent : {length + 4 * radius, length / 2}) {  // the grid holds the span, or half
+    RidgeBuffers four, one;
+    reserve_ridge(&four, extent, 2.0f, int(pts.size()));
+    reserve_ridge(&one, extent, 2.0f, 100);
+    std::vector<Eigen::Vector3f> a(1000), b(1000);
+    const Eigen::Vector2f axis = Eigen::Vector2f(1, 0.2f).normalized();
+    const int n = extract_zridge(pts.data(), int(pts.size()), axis, 2.0f, 6, &four, a.data(), 1000);
+    const int m = extract_zridge(pts.data(), int(pts.size()), axis, 2.0f, 6, &one, b.data(), 1000);
+    ASSERT_EQ(n, m) << "extent " << extent;
+    EXPECT_GT(n, int(extent / 2 / 4)) << "extent " << extent;
+    for (int i = 0; i < n; ++i) ASSERT_EQ(a[std::size_t(i)], b[std::size_t(i)]) << "extent " << extent;
+  }
+}
+
 // The model's samples by coordinate (four at a time) give the same ridge, point for point, as the
 // samples one at a time, at any pose and in both ridge cells.
 TEST(ZRidge, ColumnsGiveTheSameRidgeAsPoints) {

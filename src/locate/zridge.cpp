@@ -174,10 +174,7 @@ int extract_zridge(const PosedPoints& pts, const Eigen::Vector2f& axis, float ce
   float* top_z = rb->top_z.data();
   int *top_i = rb->top_i.data(), *row_lo = rb->row_lo.data(), *row_hi = rb->row_hi.data();
   // Branch-free: whether a point tops its cell is as good as random.
-  const auto bin = [&](float u, float v, float z, int k) {
-    const int r_ = int((u - u0) * inv_cell);
-    const int c = int((v - v0) * inv_cell);
-    if (r_ < 0 || c < 0 || r_ >= rows || c >= cols) return;
+  const auto bin_cell = [&](int r_, int c, float z, int k) {
     const std::size_t cell_index = std::size_t(r_) * cols + c;
     const float old_z = top_z[cell_index];
     const int higher = -int(z > old_z);  // all ones or zero
@@ -186,8 +183,34 @@ int extract_zridge(const PosedPoints& pts, const Eigen::Vector2f& axis, float ce
     row_lo[r_] = std::min(row_lo[r_], c);
     row_hi[r_] = std::max(row_hi[r_], c);
   };
+  const auto bin = [&](float u, float v, float z, int k) {
+    const int r_ = int((u - u0) * inv_cell);
+    const int c = int((v - v0) * inv_cell);
+    if (r_ < 0 || c < 0 || r_ >= rows || c >= cols) return;
+    bin_cell(r_, c, z, k);
+  };
   if (n_taken <= max_taken) {
-    for (int k = 0; k < n_taken; ++k) {
+    // Rows and columns four at a time (the same truncation as bin's); the cells one at a time.
+    const __m128 u0_4 = _mm_set1_ps(u0), v0_4 = _mm_set1_ps(v0), inv4 = _mm_set1_ps(inv_cell);
+    const __m128i rows4 = _mm_set1_epi32(rows), cols4 = _mm_set1_epi32(cols), minus1 = _mm_set1_epi32(-1);
+    alignas(16) int lane_r[4], lane_c[4];
+    int k = 0;
+    for (; k + 4 <= n_taken; k += 4) {
+      const __m128i r4 =
+          _mm_cvttps_epi32(_mm_mul_ps(_mm_sub_ps(_mm_loadu_ps(&rb->u[std::size_t(k)]), u0_4), inv4));
+      const __m128i c4 =
+          _mm_cvttps_epi32(_mm_mul_ps(_mm_sub_ps(_mm_loadu_ps(&rb->v[std::size_t(k)]), v0_4), inv4));
+      const __m128i inside =
+          _mm_and_si128(_mm_and_si128(_mm_cmpgt_epi32(r4, minus1), _mm_cmplt_epi32(r4, rows4)),
+                        _mm_and_si128(_mm_cmpgt_epi32(c4, minus1), _mm_cmplt_epi32(c4, cols4)));
+      _mm_store_si128(reinterpret_cast<__m128i*>(lane_r), r4);
+      _mm_store_si128(reinterpret_cast<__m128i*>(lane_c), c4);
+      const int in = _mm_movemask_ps(_mm_castsi128_ps(inside));
+      for (int j = 0; j < 4; ++j)
+        if (in & (1 << j))
+          bin_cell(lane_r[j], lane_c[j], rb->z[std::size_t(k + j)], rb->index[std::size_t(k + j)]);
+    }
+    for (; k < n_taken; ++k) {
       const std::size_t i = std::size_t(k);
       bin(rb->u[i], rb->v[i], rb->z[i], rb->index[i]);
     }
@@ -211,7 +234,7 @@ int extract_zridge(const PosedPoints& pts, const Eigen::Vector2f& axis, float ce
   for (int r_ = 0; r_ < rows; ++r_) {
     const std::size_t row0 = std::size_t(r_) * cols;
     float* zr = &rb->top_z[row0];
-    const int lo = rb->row_lo[std::size_t(r_)], hi = rb->row_hi[std::size_t(r_)];
+    const int lo = row_lo[r_], hi = row_hi[r_];
     if (whole_surface)
       for (int c = lo; c <= hi && n < capacity; ++c)
         if (zr[c] != kNone) out[n++] = emit(row0 + c);
