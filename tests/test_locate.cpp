@@ -291,6 +291,41 @@ TEST(PointColumns, NearestIsTheFirstOfTheClosestAsBruteForce) {
   EXPECT_GT(ties, 20);  // the tie-break was put to the test
 }
 
+// Both ways from one pass: each answer is nearest()'s from that side, ties to the first included.
+TEST(PointColumns, NearestBothWaysIsNearestFromEachSide) {
+  std::mt19937 rng(11);
+  std::uniform_int_distribution<int> near(-1, 1);
+  const auto draw = [&](int n) {
+    std::vector<Eigen::Vector3f> pts;
+    for (int k = 0; k < n; ++k) pts.emplace_back(float(near(rng)), float(near(rng)), 0.5f * float(near(rng)));
+    return pts;
+  };
+  PointColumns b_columns, a_columns;
+  b_columns.reserve(16);
+  a_columns.reserve(16);
+  for (int trial = 0; trial < 300; ++trial) {
+    const int na = trial % 11, nb = (trial / 11) % 14;
+    const std::vector<Eigen::Vector3f> a = draw(na), b = draw(nb);
+    ASSERT_TRUE(b_columns.assign(b.data(), nb));
+    ASSERT_TRUE(a_columns.assign(a.data(), na));
+    std::vector<int> a_to(16), b_to(16);
+    std::vector<float> a_d2(16), b_d2(16);
+    b_columns.nearest_both_ways(a.data(), na, a_to.data(), a_d2.data(), b_to.data(), b_d2.data());
+    for (int i = 0; i < na; ++i) {
+      float d2 = 0;
+      EXPECT_EQ(a_to[std::size_t(i)], b_columns.nearest(a[std::size_t(i)], &d2)) << "trial " << trial;
+      EXPECT_EQ(a_d2[std::size_t(i)], d2) << "trial " << trial;
+    }
+    for (int j = 0; j < nb; ++j) {
+      float d2 = 0;
+      EXPECT_EQ(b_to[std::size_t(j)], a_columns.nearest(b[std::size_t(j)], &d2)) << "trial " << trial;
+      if (na > 0) {
+        EXPECT_EQ(b_d2[std::size_t(j)], d2) << "trial " << trial;
+      }
+    }
+  }
+}
+
 TEST(RidgeIcp, ConvergesFromThePapersRanges) {
   OnePipe s = one_pipe("sbend", 4);
   const PipeModel& model = preset_model("sbend");

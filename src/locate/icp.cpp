@@ -9,18 +9,6 @@
 namespace pipeloc {
 namespace {
 
-// Nearest of pts[0..n) to q (brute force: ridges hold a few hundred points); the first of equals.
-int nearest(const Eigen::Vector3f& q, const Eigen::Vector3f* pts, int n, float* d2) {
-  int best = -1;
-  float bd = 1e30f;
-  for (int i = 0; i < n; ++i) {
-    const float d = (pts[i] - q).squaredNorm();
-    if (d < bd) bd = d, best = i;
-  }
-  *d2 = bd;
-  return best;
-}
-
 int model_ridge(const LocatorModel& lm, const Pose& pose, const Eigen::Vector2f& axis, float cell_mm,
                 const LocateConfig& cfg, IcpBuffers* buf) {
   PosedPoints samples;
@@ -34,32 +22,26 @@ int model_ridge(const LocatorModel& lm, const Pose& pose, const Eigen::Vector2f&
                         int(buf->model_ridge.size()), cfg.match_surface);
 }
 
-// Mean of min(distance, cap) from each of a to its nearest in b.
-// A point set searched by nearest(): on its columns when they hold it, else point by point.
-struct SearchSet {
-  const Eigen::Vector3f* p;
-  int n;
-  const PointColumns* columns;  // null: not laid out (more points than reserved for)
-  SearchSet(const Eigen::Vector3f* points, int count, PointColumns* cols)
-      : p(points), n(count), columns(cols->assign(points, count) ? cols : nullptr) {}
-  int nearest_to(const Eigen::Vector3f& q, float* d2) const {
-    return columns ? columns->nearest(q, d2) : nearest(q, p, n, d2);
-  }
-};
+// Nearest partners both ways between the model's ridge (buf->model_ridge[0..nm)) and the observed
+// one, laid out in buf->observed_columns: buf->model_to/model_d2 and buf->observed_to/observed_d2.
+void pair_up(int nm, IcpBuffers* buf) {
+  buf->observed_columns.nearest_both_ways(buf->model_ridge.data(), nm, buf->model_to.data(),
+                                          buf->model_d2.data(), buf->observed_to.data(),
+                                          buf->observed_d2.data());
+}
 
-float truncated_mean(const Eigen::Vector3f* a, int na, const SearchSet& b, float cap, int* matched) {
-  if (na == 0) return cap;
+// Mean of min(distance, cap) over squared distances d2[0..n) (cap if none); *matched: those under cap.
+float truncated_mean(const float* d2, int n, float cap, int* matched) {
+  if (n == 0) return cap;
   float sum = 0;
   int m = 0;
-  for (int i = 0; i < na; ++i) {
-    float d2;
-    b.nearest_to(a[i], &d2);
-    const float d = std::sqrt(d2);
+  for (int i = 0; i < n; ++i) {
+    const float d = std::sqrt(d2[i]);
     if (d < cap) ++m;
     sum += std::min(d, cap);
   }
   if (matched) *matched = m;
-  return sum / float(na);
+  return sum / float(n);
 }
 
 }  // namespace
@@ -100,6 +82,57 @@ int PointColumns::nearest(const Eigen::Vector3f& q, float* d2) const {
   return low < 1e30f ? best : -1;
 }
 
+void PointColumns::nearest_both_ways(const Eigen::Vector3f* a, int na, int* a_to, float* a_d2, int* b_to,
+                                     float* b_d2) const {
+  const float *xs = x.data(), *ys = y.data(), *zs = z.data();
+  std::fill_n(b_d2, n, 1e30f);
+  std::fill_n(b_to, n, -1);
+  const __m128i four = _mm_set1_epi32(4);
+  for (int i = 0; i < na; ++i) {
+    const Eigen::Vector3f& q = a[i];
+    const __m128 qx = _mm_set1_ps(q.x()), qy = _mm_set1_ps(q.y()), qz = _mm_set1_ps(q.z());
+    const __m128i i4 = _mm_set1_epi32(i);
+    __m128 low4 = _mm_set1_ps(1e30f);
+    __m128i at4 = _mm_set1_epi32(-1), index4 = _mm_setr_epi32(0, 1, 2, 3);
+    int j = 0;
+    for (; j + 4 <= n; j += 4, index4 = _mm_add_epi32(index4, four)) {
+      // (b - q)^2 summed as nearest() sums it, and as nearest() from b[j] sums (q - b)^2
+      const __m128 dx = _mm_sub_ps(_mm_loadu_ps(xs + j), qx), dy = _mm_sub_ps(_mm_loadu_ps(ys + j), qy),
+                   dz = _mm_sub_ps(_mm_loadu_ps(zs + j), qz);
+      const __m128 d = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz));
+      const __m128i closer = _mm_castps_si128(_mm_cmplt_ps(d, low4));
+      low4 = _mm_min_ps(d, low4);
+      at4 = _mm_or_si128(_mm_and_si128(closer, index4), _mm_andnot_si128(closer, at4));
+      // b's side: a strictly closer a[i] replaces the one held, so ties keep the first
+      const __m128 held = _mm_loadu_ps(b_d2 + j);
+      const __m128i b_closer = _mm_castps_si128(_mm_cmplt_ps(d, held));
+      _mm_storeu_ps(b_d2 + j, _mm_min_ps(d, held));
+      const __m128i held_to = _mm_loadu_si128(reinterpret_cast<const __m128i*>(b_to + j));
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(b_to + j),
+                       _mm_or_si128(_mm_and_si128(b_closer, i4), _mm_andnot_si128(b_closer, held_to)));
+    }
+    alignas(16) float lanes[4];
+    alignas(16) int lane_at[4];
+    _mm_store_ps(lanes, low4);
+    _mm_store_si128(reinterpret_cast<__m128i*>(lane_at), at4);
+    float low = 1e30f;
+    int best = -1;
+    for (int l = 0; l < 4; ++l)
+      if (lanes[l] < low || (lanes[l] == low && lane_at[l] >= 0 && lane_at[l] < best))
+        low = lanes[l], best = lane_at[l];
+    for (; j < n; ++j) {
+      const float dx = xs[j] - q.x(), dy = ys[j] - q.y(), dz = zs[j] - q.z();
+      const float d = dx * dx + dy * dy + dz * dz;
+      if (d < low) low = d, best = j;
+      if (d < b_d2[j]) b_d2[j] = d, b_to[j] = i;
+    }
+    a_d2[i] = low;
+    a_to[i] = low < 1e30f ? best : -1;
+  }
+  for (int j = 0; j < n; ++j)
+    if (!(b_d2[j] < 1e30f)) b_to[j] = -1;
+}
+
 void PointColumns::reserve(int capacity) {
   x.assign(std::size_t(capacity), 0.0f);
   y.assign(std::size_t(capacity), 0.0f);
@@ -121,7 +154,8 @@ void reserve_icp(IcpBuffers* buf, const LocatorModel& lm, int max_ridge_points, 
   buf->src.assign(std::size_t(2 * max_ridge_points), Eigen::Vector3f::Zero());
   buf->dst.assign(std::size_t(2 * max_ridge_points), Eigen::Vector3f::Zero());
   buf->observed_columns.reserve(max_ridge_points);
-  buf->model_columns.reserve(max_ridge_points);
+  for (auto* to : {&buf->model_to, &buf->observed_to}) to->assign(std::size_t(max_ridge_points), -1);
+  for (auto* d2 : {&buf->model_d2, &buf->observed_d2}) d2->assign(std::size_t(max_ridge_points), 0.0f);
   // The top views span a pipe and a diameter of margin each side, in cells of half the finest ridge.
   const int side = int((lm.extent_l_mm + 4 * lm.tube_d_mm) / (0.5f * ridge_cell_mm)) + 2;
   buf->observed_top.reserve(side);
@@ -246,11 +280,11 @@ Pose fit_rigid(const Eigen::Vector3f* src, const Eigen::Vector3f* dst, int n) {
 
 namespace {
 
-// ridge_icp's iterations on the observed ridge laid out once as `observed` (cell_mm > 0).
+// ridge_icp's iterations on the observed ridge, laid out in buf->observed_columns (cell_mm > 0).
 RidgeFit iterate_ridge_icp(const LocatorModel& lm, const Pose& start, const Eigen::Vector3f* obs, int n_obs,
-                           const SearchSet& observed, const Eigen::Vector2f& axis, const LocateConfig& cfg,
-                           int max_iterations, IcpBuffers* buf, float gate_mm, float cell_mm,
-                           const Eigen::Vector3f* start_ridge, int start_ridge_count) {
+                           const Eigen::Vector2f& axis, const LocateConfig& cfg, int max_iterations,
+                           IcpBuffers* buf, float gate_mm, float cell_mm, const Eigen::Vector3f* start_ridge,
+                           int start_ridge_count) {
   RidgeFit fit;
   fit.pose = start;
   const float d = lm.tube_d_mm;
@@ -267,12 +301,11 @@ RidgeFit iterate_ridge_icp(const LocatorModel& lm, const Pose& start, const Eige
     } else {
       nm = model_ridge(lm, fit.pose, axis, cell_mm, cfg, buf);
     }
-    const SearchSet model(buf->model_ridge.data(), nm, &buf->model_columns);
+    pair_up(nm, buf);
     int pairs = 0;
     for (int i = 0; i < nm; ++i) {  // 2.2.2
-      float d2;
-      const int j = observed.nearest_to(buf->model_ridge[i], &d2);
-      if (j < 0 || d2 > gate * gate) continue;
+      const int j = buf->model_to[std::size_t(i)];
+      if (j < 0 || buf->model_d2[std::size_t(i)] > gate * gate) continue;
       buf->src[pairs] = buf->model_ridge[i];
       buf->dst[pairs] = obs[j];
       ++pairs;
@@ -280,9 +313,8 @@ RidgeFit iterate_ridge_icp(const LocatorModel& lm, const Pose& start, const Eige
     // Both ways: observed ridge points pull too, so the model cannot slide along the ridge
     // towards parts that were not observed.
     for (int j = 0; j < n_obs && pairs < int(buf->src.size()); ++j) {
-      float d2;
-      const int i = model.nearest_to(obs[j], &d2);
-      if (i < 0 || d2 > gate * gate) continue;
+      const int i = buf->observed_to[std::size_t(j)];
+      if (i < 0 || buf->observed_d2[std::size_t(j)] > gate * gate) continue;
       buf->src[pairs] = buf->model_ridge[i];
       buf->dst[pairs] = obs[j];
       ++pairs;
@@ -301,15 +333,14 @@ RidgeFit iterate_ridge_icp(const LocatorModel& lm, const Pose& start, const Eige
 
 // ridge_icp's closing evaluation of fit->pose: cost_mm, matched, model_ridge_points (the model's
 // ridge stays in buf->model_ridge).
-void score_ridge_fit(const LocatorModel& lm, const Eigen::Vector3f* obs, int n_obs, const SearchSet& observed,
-                     const Eigen::Vector2f& axis, const LocateConfig& cfg, IcpBuffers* buf, float cell_mm,
-                     RidgeFit* fit) {
+void score_ridge_fit(const LocatorModel& lm, int n_obs, const Eigen::Vector2f& axis, const LocateConfig& cfg,
+                     IcpBuffers* buf, float cell_mm, RidgeFit* fit) {
   const int nm = model_ridge(lm, fit->pose, axis, cell_mm, cfg, buf);
   fit->model_ridge_points = nm;
   const float cap = 0.5f * lm.tube_d_mm;
-  const float m2o = truncated_mean(buf->model_ridge.data(), nm, observed, cap, &fit->matched);
-  const float o2m =
-      truncated_mean(obs, n_obs, SearchSet(buf->model_ridge.data(), nm, &buf->model_columns), cap, nullptr);
+  pair_up(nm, buf);
+  const float m2o = truncated_mean(buf->model_d2.data(), nm, cap, &fit->matched);
+  const float o2m = truncated_mean(buf->observed_d2.data(), n_obs, cap, nullptr);
   fit->cost_mm = 0.5f * (m2o + o2m);
 }
 
@@ -320,8 +351,10 @@ RidgeFit ridge_icp_steps(const LocatorModel& lm, const Pose& start, const Eigen:
                          IcpBuffers* buf, float gate_mm, float cell_mm, const Eigen::Vector3f* start_ridge,
                          int start_ridge_count) {
   if (cell_mm <= 0) cell_mm = float(cfg.ridge_cell_mm);
-  const SearchSet observed(obs, n_obs, &buf->observed_columns);
-  return iterate_ridge_icp(lm, start, obs, n_obs, observed, axis, cfg, max_iterations, buf, gate_mm, cell_mm,
+  RidgeFit unfit;
+  unfit.pose = start;
+  if (!buf->observed_columns.assign(obs, n_obs)) return unfit;
+  return iterate_ridge_icp(lm, start, obs, n_obs, axis, cfg, max_iterations, buf, gate_mm, cell_mm,
                            start_ridge, start_ridge_count);
 }
 
@@ -329,10 +362,12 @@ RidgeFit ridge_icp(const LocatorModel& lm, const Pose& start, const Eigen::Vecto
                    const Eigen::Vector2f& axis, const LocateConfig& cfg, int max_iterations, IcpBuffers* buf,
                    float gate_mm, float cell_mm, const Eigen::Vector3f* start_ridge, int start_ridge_count) {
   if (cell_mm <= 0) cell_mm = float(cfg.ridge_cell_mm);
-  const SearchSet observed(obs, n_obs, &buf->observed_columns);  // laid out once for both steps
-  RidgeFit fit = iterate_ridge_icp(lm, start, obs, n_obs, observed, axis, cfg, max_iterations, buf, gate_mm,
-                                   cell_mm, start_ridge, start_ridge_count);
-  score_ridge_fit(lm, obs, n_obs, observed, axis, cfg, buf, cell_mm, &fit);
+  RidgeFit fit;
+  fit.pose = start;
+  if (!buf->observed_columns.assign(obs, n_obs)) return fit;  // laid out once for both steps
+  fit = iterate_ridge_icp(lm, start, obs, n_obs, axis, cfg, max_iterations, buf, gate_mm, cell_mm,
+                          start_ridge, start_ridge_count);
+  score_ridge_fit(lm, n_obs, axis, cfg, buf, cell_mm, &fit);
   return fit;
 }
 

@@ -34,12 +34,19 @@ struct PointColumns {
   bool assign(const Eigen::Vector3f* points, int count);
   // The first of the points closest to q (-1 if none), its squared distance in d2.
   int nearest(const Eigen::Vector3f& q, float* d2) const;
+  // nearest() both ways between a[0..na) and these points, from one pass over the pairs: for each
+  // a[i] its nearest here (a_to[i], a_d2[i]), and for each point here the first of a closest to
+  // it (b_to[j], b_d2[j]; -1 if a is empty). The same answers as nearest() each way.
+  void nearest_both_ways(const Eigen::Vector3f* a, int na, int* a_to, float* a_d2, int* b_to,
+                         float* b_d2) const;
 };
 
 struct IcpBuffers {
   std::vector<Eigen::Vector3f> model_ridge;  // P_m
   std::vector<Eigen::Vector3f> src, dst;     // correspondences
-  PointColumns observed_columns, model_columns;
+  PointColumns observed_columns;
+  std::vector<int> model_to, observed_to;  // nearest partners both ways (PointColumns::nearest_both_ways)
+  std::vector<float> model_d2, observed_d2;
   RidgeBuffers ridge;
   TopDistance observed_top;  // for slide_start
 };
@@ -98,7 +105,8 @@ SlidStart slide_start(const LocatorModel& lm, const StartSet& starts, int s, con
                       const Eigen::Vector3f* observed_in_axis, int n_observed, const LocateConfig& cfg,
                       IcpBuffers* buf);
 
-// One run of Algorithm 2's inner loop from `start`.
+// One run of Algorithm 2's inner loop from `start`. The observed ridge holds at most the
+// max_ridge_points of reserve_icp (more: no fit, cost_mm stays 1e30).
 // `gate_mm` < 0 starts the correspondence gate at L/3 (a cold start). `cell_mm` is the ridge
 // cell of the observed ridge given (<= 0: cfg.ridge_cell_mm); the model's ridge uses the same.
 // `start_ridge` (model frame), when given, is the model's ridge at `start` along `axis` in cells of
