@@ -105,8 +105,10 @@ const LocateOutput& Locator::locate(const Image<float>& depth, const CameraInfo&
     static void run(void* ctx, int band, int) {
       const NormalTask& t = *static_cast<const NormalTask*>(ctx);
       const ZBuffer& zb = t.self->zb_;
-      compute_normals_rows(zb, t.window, t.min_valid, band_begin(band, t.bands, zb.height),
-                           band_begin(band + 1, t.bands, zb.height), band, &t.self->nm_);
+      const int begin = band_begin(band, t.bands, zb.height), end = band_begin(band + 1, t.bands, zb.height);
+      compute_normals_rows(zb, t.window, t.min_valid, begin, end, band, &t.self->nm_);
+      // II-B's upward cells, while the band's normals are at hand (off the regions' serial path).
+      mark_upward_rows(zb, t.self->nm_, t.self->cfg_, begin, end, &t.self->rb_);
     }
   } normal_task{this, window, int(cfg_.normal_min_valid_share * window * window), pool_.size()};
   pool_.run(pool_.size(), &NormalTask::run, &normal_task);

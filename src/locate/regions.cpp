@@ -80,13 +80,20 @@ float longest_distance(const ZBuffer& zb, const int* cells, int count) {
   return longest;
 }
 
+void mark_upward_rows(const ZBuffer& zb, const NormalMap& nm, const LocateConfig& cfg, int row_begin,
+                      int row_end, RegionBuffers* rb) {
+  const float up_min = float(std::cos(cfg.upward_normal_max_deg * kDeg));
+  Image<std::uint8_t>& open = rb->unlabelled_core;
+  for (int j = row_begin; j < row_end; ++j)
+    for (int i = 0; i < zb.width; ++i) open.at(i, j) = nm.n.at(i, j).z() > up_min;
+}
+
 RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, const LocateConfig& cfg,
                                       float d, float l, RegionBuffers* rb, OnCandidateFound on_found,
                                       void* context) {
   RegionStats stats;
   rb->candidates.clear();
   const int w = zb.z.width;
-  const float up_min = float(std::cos(cfg.upward_normal_max_deg * kDeg));
   const float cont_min = float(std::cos(cfg.continuity_max_deg * kDeg));
   const float step_max = float(cfg.continuity_step_max_mm);
   const float drop_max = float(cfg.region_max_drop_of_d) * d;
@@ -95,10 +102,8 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
   const float area_min = float(cfg.core_min_area_of_d2) * d * d;
   const float core_extent_max = float(cfg.core_max_extent_of_l) * l;
 
-  // Upward cells are marked once; labelling then reads one byte per neighbour.
+  // Upward cells were marked once (mark_upward_rows); labelling reads one byte per neighbour.
   Image<std::uint8_t>& open = rb->unlabelled_core;
-  for (int j = 0; j < zb.height; ++j)
-    for (int i = 0; i < zb.width; ++i) open.at(i, j) = nm.n.at(i, j).z() > up_min;
 
   // 1. Connected regions (8-connectivity) of upward normals with A_n >= A_th.
   struct Core {

@@ -46,7 +46,14 @@ struct RegionStats {
 void reserve_regions(RegionBuffers* rb, const ZBuffer& zb, const LocateConfig& cfg, float tube_d_mm,
                      float extent_l_mm);
 
-// Fills rb->candidates, best first (largest core first). Each candidate is complete when
+// Algorithm 1's first test, cell by cell: marks in rb->unlabelled_core the cells of rows
+// [row_begin, row_end) whose normal is upward. Row bands can be marked on separate threads, as
+// soon as their normals are known.
+void mark_upward_rows(const ZBuffer& zb, const NormalMap& nm, const LocateConfig& cfg, int row_begin,
+                      int row_end, RegionBuffers* rb);
+
+// Fills rb->candidates, best first (largest core first). Every row must have been marked
+// (mark_upward_rows) for this frame's normals. Each candidate is complete when
 // on_found(context, candidates so far) is called after it (another thread may work it from then on).
 using OnCandidateFound = void (*)(void* context, int found);
 RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, const LocateConfig& cfg,
