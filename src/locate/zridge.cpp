@@ -19,6 +19,7 @@ void reserve_ridge(RidgeBuffers* rb, float max_extent_mm, float cell_mm, int max
   rb->row_lo.assign(std::size_t(rb->rows), 0);
   rb->row_hi.assign(std::size_t(rb->rows), 0);
   rb->occupied.assign(std::size_t(rb->cols), 0);
+  rb->occupied_z.assign(std::size_t(rb->cols), 0.0f);
 }
 
 void OrientedColumns::assign(const Eigen::Vector3f* points, const Eigen::Vector3f* normals, int n,
@@ -231,31 +232,38 @@ int extract_zridge(const PosedPoints& pts, const Eigen::Vector2f& axis, float ce
   int n = 0;
   const int min_run = std::max(1, int(min_run_mm / cell));
   int* occupied = rb->occupied.data();
+  float* occupied_z = rb->occupied_z.data();
   for (int r_ = 0; r_ < rows; ++r_) {
     const std::size_t row0 = std::size_t(r_) * cols;
     float* zr = &rb->top_z[row0];
     const int lo = row_lo[r_], hi = row_hi[r_];
-    if (whole_surface)
+    if (whole_surface) {
       for (int c = lo; c <= hi && n < capacity; ++c)
         if (zr[c] != kNone) out[n++] = emit(row0 + c);
-    // The occupied cells of the row, listed without branches; runs are then found on the list,
-    // where a run's end is one test per occupied cell instead of two or three per cell.
+      if (lo <= hi) std::fill(zr + lo, zr + hi + 1, kNone);
+      continue;
+    }
+    // The occupied cells of the row and their heights, listed without branches while the row is
+    // emptied; runs are then found on the list, where a run's end is one test per occupied cell
+    // instead of two or three per cell.
     int m = 0;
-    if (!whole_surface)
-      for (int c = lo; c <= hi; ++c) occupied[m] = c, m += zr[c] != kNone;
+    for (int c = lo; c <= hi; ++c) {
+      const float z = zr[c];
+      occupied[m] = c, occupied_z[m] = z, m += z != kNone;
+      zr[c] = kNone;
+    }
     for (int a = 0; a < m && n < capacity;) {
       // A run tolerates one empty cell (sampling gaps): occupied cells at most two apart.
-      int best = occupied[a], b = a;
+      int best = a, b = a;
       while (b + 1 < m && occupied[b + 1] - occupied[b] <= 2) {
         ++b;
-        best = zr[occupied[b]] > zr[best] ? occupied[b] : best;
+        best = occupied_z[b] > occupied_z[best] ? b : best;
       }
       // Peaks at the edge of a run are slopes, not ridges.
-      const int c = occupied[a], end = occupied[b];
-      if (end - c + 1 >= min_run && best != c && best != end) out[n++] = emit(row0 + best);
+      if (occupied[b] - occupied[a] + 1 >= min_run && best != a && best != b)
+        out[n++] = emit(row0 + occupied[best]);
       a = b + 1;
     }
-    if (lo <= hi) std::fill(zr + lo, zr + hi + 1, kNone);
   }
   return n;
 }

@@ -14,6 +14,7 @@ struct RidgeBuffers {
   std::vector<int> top_i;           // per cell: the index of that point
   std::vector<int> row_lo, row_hi;  // per row: first and last occupied column of this call
   std::vector<int> occupied;        // the occupied columns of the row being scanned
+  std::vector<float> occupied_z;    // and their highest z
   int max_points = 0;               // points taken that the columns below hold
   std::vector<float> u, v, z;       // per point taken: along and across the axis, and height
   std::vector<int> index;           // per point taken: its index in the input
