@@ -326,6 +326,41 @@ TEST(PointColumns, NearestBothWaysIsNearestFromEachSide) {
   }
 }
 
+// A bound only cuts short what lies beyond it: up to the bound the distance is the exact one, and
+// beyond it the value returned lies beyond it too (models with and without symmetries).
+TEST(PoseDistance, ExactUpToTheBoundAndBeyondItPastIt) {
+  LocateConfig cfg;
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-1, 1);
+  for (const char* name : {"sbend", "torus"}) {
+    const LocatorModel lm = prepare_locator_model(preset_model(name), 8, cfg);
+    int below = 0, beyond = 0;
+    for (int trial = 0; trial < 400; ++trial) {
+      Pose a = Pose::Identity(), b = Pose::Identity();
+      a.linear() = Eigen::AngleAxisd(u(rng) * M_PI, Eigen::Vector3d(u(rng), u(rng), 1).normalized())
+                       .toRotationMatrix();
+      a.translation() = Eigen::Vector3d(u(rng), u(rng), u(rng)) * 100;
+      const double scale = std::pow(10.0, 2 * u(rng) - 1);  // small and large moves
+      b.linear() =
+          Eigen::AngleAxisd(0.05 * scale * u(rng), Eigen::Vector3d::UnitZ()).toRotationMatrix() * a.linear();
+      b.translation() = a.translation() + Eigen::Vector3d(u(rng), u(rng), u(rng)) * 3 * scale;
+      const float exact = pose_distance_mm(lm, a, b);
+      for (const float bound : {1.0f, 5.0f, 10.0f, 50.0f}) {
+        const float cut = pose_distance_mm(lm, a, b, bound);
+        if (exact <= bound) {
+          EXPECT_EQ(cut, exact) << name << " trial " << trial << " bound " << bound;
+          ++below;
+        } else {
+          EXPECT_GT(cut, bound) << name << " trial " << trial << " bound " << bound;
+          ++beyond;
+        }
+      }
+    }
+    EXPECT_GT(below, 200) << name;
+    EXPECT_GT(beyond, 200) << name;
+  }
+}
+
 TEST(RidgeIcp, ConvergesFromThePapersRanges) {
   OnePipe s = one_pipe("sbend", 4);
   const PipeModel& model = preset_model("sbend");

@@ -276,7 +276,8 @@ void Locator::merge_estimate(int c) {
   CandidateTrace& trace = out_.traces[std::size_t(c)];
   // Two regions of one pipe give one estimate: keep the better.
   for (auto& other : out_.estimates) {
-    if (pose_distance_mm(lm_, other.model_to_bin, e.model_to_bin) > 2 * lm_.tube_d_mm) continue;
+    if (pose_distance_mm(lm_, other.model_to_bin, e.model_to_bin, 2 * lm_.tube_d_mm) > 2 * lm_.tube_d_mm)
+      continue;
     if (other.check.agreement() >= e.check.agreement()) {
       trace.outcome = CandidateOutcome::duplicate;
       return;
@@ -358,7 +359,7 @@ void Locator::work_candidate(int c, Worker& wk, const Image<float>& depth, const
   for (std::size_t i = 0; i < wk.fits.size(); ++i) {
     bool seen = false;
     for (int j = 0; j < distinct && !seen; ++j)
-      seen = pose_distance_mm(lm_, wk.fits[i].pose, wk.fits[std::size_t(j)].pose) < d;
+      seen = pose_distance_mm(lm_, wk.fits[i].pose, wk.fits[std::size_t(j)].pose, d) < d;
     if (!seen)
       std::rotate(wk.fits.begin() + distinct, wk.fits.begin() + long(i), wk.fits.begin() + long(i) + 1),
           ++distinct;
@@ -403,6 +404,7 @@ void Locator::work_candidate(int c, Worker& wk, const Image<float>& depth, const
   // pipes fit in more than one way). The best few distinct states under R_th are refined on the
   // whole region, point to plane, and the depth image judges them (no floating, no sinking, no
   // upside-down pipe). A runner-up the image confirms about as well makes the pipe ambiguous.
+  const float ambiguity_mm = float(cfg_.ambiguity_pose_mm);
   PipeEstimate best, second;
   bool have_best = false, have_second = false;
   auto quality = [](const Verification& v) { return v.agreement() - 2 * v.free_space(); };
@@ -426,12 +428,11 @@ void Locator::work_candidate(int c, Worker& wk, const Image<float>& depth, const
     e.refine_rms_mm = refined.rms_mm;
     e.candidate = c;
     if (!have_best || quality(e.check) > quality(best.check)) {
-      if (have_best &&
-          pose_distance_mm(lm_, best.model_to_bin, e.model_to_bin) > float(cfg_.ambiguity_pose_mm))
+      if (have_best && pose_distance_mm(lm_, best.model_to_bin, e.model_to_bin, ambiguity_mm) > ambiguity_mm)
         second = best, have_second = true;
       best = e, have_best = true;
     } else if (!have_second || quality(e.check) > quality(second.check)) {
-      if (pose_distance_mm(lm_, best.model_to_bin, e.model_to_bin) > float(cfg_.ambiguity_pose_mm))
+      if (pose_distance_mm(lm_, best.model_to_bin, e.model_to_bin, ambiguity_mm) > ambiguity_mm)
         second = e, have_second = true;
     }
   };
@@ -441,7 +442,7 @@ void Locator::work_candidate(int c, Worker& wk, const Image<float>& depth, const
     bool seen = false;
     for (std::size_t j = 0; j < i && !seen; ++j)
       seen = wk.fits[j].cost_mm <= r_th &&
-             pose_distance_mm(lm_, wk.fits[i].pose, wk.fits[j].pose) < float(cfg_.ambiguity_pose_mm);
+             pose_distance_mm(lm_, wk.fits[i].pose, wk.fits[j].pose, ambiguity_mm) < ambiguity_mm;
     if (seen) continue;
     if (out_of_time(deadline)) return;  // an unchecked runner-up could hide an ambiguity
     ++tried;
@@ -456,7 +457,7 @@ void Locator::work_candidate(int c, Worker& wk, const Image<float>& depth, const
     const float found_cost_mm = best.ridge_cost_mm;
     for (const Pose& half_turn : model_.near_symmetries) {
       const Pose twin = found * half_turn;
-      if (have_second && pose_distance_mm(lm_, twin, second.model_to_bin) <= float(cfg_.ambiguity_pose_mm))
+      if (have_second && pose_distance_mm(lm_, twin, second.model_to_bin, ambiguity_mm) <= ambiguity_mm)
         continue;
       if (out_of_time(deadline)) return;
       judge(twin, found_cost_mm);

@@ -183,19 +183,22 @@ int ridge_sample_stride(float cell_mm, const LocateConfig& cfg) {
   return per_side * per_side;
 }
 
-float pose_distance_mm(const LocatorModel& lm, const Pose& a, const Pose& b) {
+float pose_distance_mm(const LocatorModel& lm, const Pose& a, const Pose& b, float bound_mm) {
   const Eigen::Matrix4f ma = a.matrix().cast<float>();
-  float best = 1e30f;
+  // A squared distance above this has a square root above bound_mm, rounding included.
+  const float cut_sq = bound_mm * bound_mm * (1 + 1e-5f);
+  // The worst squared distance for mb, or (cut short) one above cut_sq.
   auto worst_for = [&](const Eigen::Matrix4f& mb) {
     float worst = 0;
     for (const auto& p : lm.check_points) {
       const Eigen::Vector3f d = (ma.topLeftCorner<3, 3>() - mb.topLeftCorner<3, 3>()) * p +
                                 (ma.topRightCorner<3, 1>() - mb.topRightCorner<3, 1>());
       worst = std::max(worst, d.squaredNorm());
+      if (worst > cut_sq) break;  // this symmetry is beyond the bound whatever the rest
     }
     return std::sqrt(worst);
   };
-  best = worst_for(b.matrix().cast<float>());
+  float best = worst_for(b.matrix().cast<float>());
   for (const auto& s : lm.model->symmetries) best = std::min(best, worst_for((b * s).matrix().cast<float>()));
   return best;
 }

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "locate/zridge.hpp"
@@ -80,6 +81,9 @@ int ridge_sample_stride(float cell_mm, const LocateConfig& cfg);
 AxisEstimate top_view_axis(const PipeModel& model, const Pose& model_to_bin, const LocateConfig& cfg);
 
 // Largest distance of the check points between two poses, minimised over the model's symmetries.
-float pose_distance_mm(const LocatorModel& lm, const Pose& a, const Pose& b);
+// Exact up to `bound_mm`; a distance beyond it may be cut short, returning some value beyond it
+// (a caller comparing with bound_mm gets the same answer, sooner).
+float pose_distance_mm(const LocatorModel& lm, const Pose& a, const Pose& b,
+                       float bound_mm = std::numeric_limits<float>::infinity());
 
 }  // namespace pipeloc
