@@ -56,7 +56,8 @@ struct LocatorModel {
   };
   static constexpr std::uint16_t kNoSample = 0xffff;  // further than the margin
   Eigen::Vector3f voxel_origin = Eigen::Vector3f::Zero();
-  float voxel_mm = 2;
+  // A power of two: the lookup's division by it is a multiplication, exactly.
+  static constexpr float voxel_mm = 2;
   int nx = 0, ny = 0, nz = 0;
   std::vector<std::uint16_t> voxel_sample;  // into samples
   std::vector<Sample> samples;              // those some voxel names, in surface-sample order
