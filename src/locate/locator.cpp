@@ -276,8 +276,8 @@ void Locator::merge_estimate(int c) {
   CandidateTrace& trace = out_.traces[std::size_t(c)];
   // Two regions of one pipe give one estimate: keep the better.
   for (auto& other : out_.estimates) {
-    if (pose_distance_mm(lm_, other.model_to_bin, e.model_to_bin, 2 * lm_.tube_d_mm) > 2 * lm_.tube_d_mm)
-      continue;
+    const float same_pipe_mm = 2 * lm_.tube_d_mm;
+    if (pose_distance_mm(lm_, other.model_to_bin, e.model_to_bin, same_pipe_mm) > same_pipe_mm) continue;
     if (other.check.agreement() >= e.check.agreement()) {
       trace.outcome = CandidateOutcome::duplicate;
       return;

@@ -116,10 +116,10 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
   constexpr int kMaxCores = 256;
   Core cores[kMaxCores];
   int n_cores = 0;
-  // The cells marked `mark` connected to (i, j), appended to the pool (and unmarked).
   // Offsets of the 8 neighbours in the buffers' pixels (the label image has the Z-buffer's width).
   int neighbour[8];
   for (int k = 0; k < 8; ++k) neighbour[k] = kDj[k] * w + kDi[k];
+  // The cells marked `mark` connected to (i, j), appended to the pool (and unmarked).
   const auto label = [&](int i, int j, std::uint8_t mark) {
     const int begin = pool;
     CellBox box;
