@@ -44,10 +44,6 @@ float truncated_mean(const float* d2, int n, float cap, int* matched) {
   return sum / float(n);
 }
 
-}  // namespace
-
-namespace {
-
 // Squared distances from q to points j..j+3 of the columns, summed as the one-at-a-time tail sums
 // them ((p - q)^2 equals (q - p)^2 exactly, so either side's search gets the same floats).
 inline __m128 distances4(const float* xs, const float* ys, const float* zs, int j, __m128 qx, __m128 qy,
@@ -138,8 +134,7 @@ void PointColumns::nearest_both_ways(const Eigen::Vector3f* a, int na, int* a_to
     a_d2[i] = low;
     a_to[i] = low < 1e30f ? best : -1;
   }
-  for (int j = 0; j < n; ++j)
-    if (!(b_d2[j] < 1e30f)) b_to[j] = -1;
+  // (b_to[j] stays -1 unless some a[i] came strictly under 1e30: no clean-up needed)
 }
 
 void PointColumns::reserve(int capacity) {
