@@ -1,7 +1,9 @@
 // pipeloc: localize freely curved pipes in a bin and hand the best pick to a PLC.
+#include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
 #include <exception>
+#include <memory>
 
 #include "app/commands.hpp"
 
@@ -13,6 +15,10 @@ int& exit_status() {
 }  // namespace pipeloc::app
 
 int main(int argc, char** argv) {
+  // Log lines go to stderr: stdout carries what a command produces (locate's JSON lines, the score
+  // and bench tables), for a pipe or a file.
+  spdlog::set_default_logger(
+      std::make_shared<spdlog::logger>("", std::make_shared<spdlog::sinks::stderr_color_sink_mt>()));
   CLI::App app{"pipeloc: pipe localization for bin picking (see README.md)"};
   app.require_subcommand(1);
   pipeloc::app::add_make_pipe(app);

@@ -16,6 +16,16 @@ rows=$(($(wc -l < "$work/r.csv") - 1))
 "$bin" score --dataset "$work/ds" --results "$work/r.csv" > "$work/score.txt"
 grep -qE '^all +2 ' "$work/score.txt" || fail "score has no 'all' row over 2 images: $(cat "$work/score.txt")"
 
+# locate's stdout is its JSON lines alone (log lines go to stderr), so that it can be piped.
+"$bin" locate --depth "$work/ds/test/000001/depth/000000.png" --camera "$work/ds/test/000001/scene_camera.json" \
+  --model "$work/u.stl" --traces > "$work/locate.jsonl" 2> "$work/locate.log"
+python3 - "$work/locate.jsonl" <<'PY' || fail "locate stdout is not JSON lines alone: $(head -3 "$work/locate.jsonl")"
+import json, sys
+objects = [json.loads(line) for line in open(sys.argv[1]).read().splitlines()]
+assert any("outcome" in o for o in objects), "no candidate trace"
+PY
+grep -q "pipes found" "$work/locate.log" || fail "locate logs no summary on stderr: $(cat "$work/locate.log")"
+
 "$bin" bench --dataset "$work/ds" --rounds 2 > "$work/bench.txt" 2>&1
 grep -q '2 rounds over the 2 target frames' "$work/bench.txt" || fail "bench header: $(head -1 "$work/bench.txt")"
 for stage in cycle zbuffer normals regions 'ridge_icp\*' 'refine\*' 'verify\*'; do
