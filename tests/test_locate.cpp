@@ -1,10 +1,14 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
+#include <atomic>
+#include <chrono>
 #include <cmath>
 #include <random>
+#include <thread>
 
 #include "config/config_file.hpp"
+#include "core/worker_pool.hpp"
 #include "locate/locator.hpp"
 #include "model/make_pipe.hpp"
 #include "score/mssd.hpp"
@@ -808,6 +812,38 @@ TEST(Config, ErrorsNameFileKeyAndExpectation) {
   EXPECT_DOUBLE_EQ(cfg.locate.scan_step_deg, 2.5);
   EXPECT_EQ(cfg.locate.max_candidates, 8);
   EXPECT_EQ(cfg.model_path, dir.file("pipe.stl"));
+}
+
+// The pool's threads spin briefly between runs, then block: every run still runs each of its
+// tasks exactly once and returns only when all are done, whether the runs follow one another at
+// once (spinning) or after a pause longer than the spin (blocked and woken).
+TEST(WorkerPool, EveryTaskOnceWhetherRunsFollowAtOnceOrAfterAPause) {
+  for (const int threads : {1, 2, 3}) {
+    WorkerPool pool(threads);
+    struct Run {
+      std::atomic<int> count[8];
+      std::atomic<int> slow_done{0};
+    } run;
+    const auto task = [](void* ctx, int t, int) {
+      Run& r = *static_cast<Run*>(ctx);
+      if (t % 3 == 0) {  // some tasks take a while, so that run() has to wait for them
+        const auto until = std::chrono::steady_clock::now() + std::chrono::microseconds(50);
+        while (std::chrono::steady_clock::now() < until) {
+        }
+        r.slow_done.fetch_add(1);
+      }
+      r.count[t].fetch_add(1);
+    };
+    for (int rep = 0; rep < 300; ++rep) {
+      const int tasks = rep % 9;  // 0 .. 8 tasks, none included
+      for (auto& c : run.count) c = 0;
+      run.slow_done = 0;
+      pool.run(tasks, task, &run);
+      for (int t = 0; t < 8; ++t) ASSERT_EQ(run.count[t].load(), t < tasks ? 1 : 0) << threads << " " << rep;
+      ASSERT_EQ(run.slow_done.load(), (tasks + 2) / 3);
+      if (rep % 50 == 49) std::this_thread::sleep_for(std::chrono::milliseconds(2));  // past the spin
+    }
+  }
 }
 
 }  // namespace

@@ -1,5 +1,6 @@
 // A fixed set of threads started once; run() hands out task indices until all are done. The
 // calling thread works too. No allocation per run (tasks are a function pointer and a context).
+// A waiting thread spins briefly before it blocks: a frame's runs follow one another closely.
 #pragma once
 
 #include <atomic>
@@ -30,8 +31,8 @@ class WorkerPool {
   std::vector<std::thread> threads_;
   std::mutex mutex_;
   std::condition_variable wake_, done_;
-  long generation_ = 0;
-  int busy_ = 0;
+  std::atomic<long> generation_{0};  // moves on with each run (written under mutex_)
+  std::atomic<int> busy_{0};         // workers not done with this run (written under mutex_)
   bool stop_ = false;
   Task fn_ = nullptr;
   void* context_ = nullptr;
