@@ -835,7 +835,7 @@ TEST(WorkerPool, EveryTaskOnceWhetherRunsFollowAtOnceOrAfterAPause) {
       r.count[t].fetch_add(1);
     };
     for (int rep = 0; rep < 300; ++rep) {
-      const int tasks = rep % 9;  // 0 .. 8 tasks, none included
+      const int tasks = rep % 9;  // 0 to 8 tasks (0: a run with nothing to do)
       for (auto& c : run.count) c = 0;
       run.slow_done = 0;
       pool.run(tasks, task, &run);
