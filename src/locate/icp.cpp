@@ -366,12 +366,11 @@ RidgeFit ridge_icp(const LocatorModel& lm, const Pose& start, const Eigen::Vecto
                    const Eigen::Vector2f& axis, const LocateConfig& cfg, int max_iterations, IcpBuffers* buf,
                    float gate_mm, float cell_mm, const Eigen::Vector3f* start_ridge, int start_ridge_count) {
   if (cell_mm <= 0) cell_mm = float(cfg.ridge_cell_mm);
-  RidgeFit fit;
-  fit.pose = start;
-  if (!buf->observed_columns.assign(obs, n_obs)) return fit;  // laid out once for both steps
-  fit = iterate_ridge_icp(lm, start, obs, n_obs, axis, cfg, max_iterations, buf, gate_mm, cell_mm,
-                          start_ridge, start_ridge_count);
-  score_ridge_fit(lm, n_obs, axis, cfg, buf, cell_mm, &fit);
+  RidgeFit fit = ridge_icp_steps(lm, start, obs, n_obs, axis, cfg, max_iterations, buf, gate_mm, cell_mm,
+                                 start_ridge, start_ridge_count);
+  // The steps laid out the observed ridge, which the evaluation pairs with again; a ridge larger
+  // than the columns were reserved for was not laid out (their count is then below n_obs): no fit.
+  if (buf->observed_columns.n == n_obs) score_ridge_fit(lm, n_obs, axis, cfg, buf, cell_mm, &fit);
   return fit;
 }
 
