@@ -322,12 +322,16 @@ TEST(Service, AFailingSourceGivesErrorsThenCyclesResume) {
 }
 
 TEST(Service, BudgetCutsASlowConfigurationShort) {
-  // A slow configuration: every start run long, many hypotheses. Without a budget a frame takes
-  // seconds; the budget leaves room for the fixed stages and a little more.
+  // A slow configuration: every start probed, on fine cells, run long; many hypotheses. Without a
+  // budget a frame takes seconds (about 2 s here, three times the budget below: with only 48 starts
+  // probed on coarse cells it had come down to about the budget's triple and failed the guard);
+  // the budget leaves room for the fixed stages and a little more.
   test::TempDir dir;
   AppConfig cfg = test::sim_config(dir, 20, 21);
   cfg.locate.initial_rotations = 12;
-  cfg.locate.icp_probe_iterations = 40;
+  cfg.locate.icp_probed_states = 144;  // all 2 x 12 x 6 starts
+  cfg.locate.icp_probe_iterations = 100;
+  cfg.locate.icp_probe_cell_mm = 2;
   cfg.locate.icp_continued_states = 24;
   cfg.locate.icp_max_iterations = 300;
   cfg.locate.icp_fine_iterations = 300;
