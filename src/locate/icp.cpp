@@ -18,7 +18,7 @@ int model_ridge(const LocatorModel& lm, const Pose& pose, const Eigen::Vector2f&
   samples.stride = ridge_sample_stride(cell_mm, cfg);
   samples.columns = lm.ridge_columns_for(samples.stride);
   samples.to_bin = pose;
-  return extract_zridge(samples, axis, cell_mm, 0.3f * lm.tube_d_mm, &buf->ridge, buf->model_ridge.data(),
+  return extract_zridge(samples, axis, cell_mm, kRidgeMinRunOfD * lm.tube_d_mm, &buf->ridge, buf->model_ridge.data(),
                         int(buf->model_ridge.size()), cfg.match_surface);
 }
 
