@@ -376,8 +376,8 @@ TEST(RidgeIcp, ConvergesFromThePapersRanges) {
   const Pose truth = s.scene.model_to_world[0];
   const Eigen::Vector3d c = truth * model.centroid.cast<double>();
   const Eigen::Vector3d axis(t.axis.axis.x(), t.axis.axis.y(), 0);
-  IcpBuffers buf;
-  reserve_icp(&buf, loc.locator_model(), 2000, float(s.cfg.ridge_cell_mm));
+  RidgeIcp icp;
+  icp.reserve(loc.locator_model(), s.cfg, 2000);
   const Eigen::Vector3f* ridge = &loc.ridge_points()[std::size_t(t.ridge_begin)];
   // The region's points, for the refinement.
   std::vector<Eigen::Vector3f> region;
@@ -392,8 +392,8 @@ TEST(RidgeIcp, ConvergesFromThePapersRanges) {
       Pose start = truth;
       start.linear() = turn * truth.linear();
       start.translation() = c + turn * (truth.translation() - c) + axis * shift;
-      const RidgeFit fit = ridge_icp(loc.locator_model(), start, ridge, t.ridge_count, t.axis.axis, s.cfg,
-                                     s.cfg.icp_max_iterations * 2, &buf);
+      const RidgeView observed{ridge, t.ridge_count, t.axis.axis, float(s.cfg.ridge_cell_mm)};
+      const RidgeFit fit = icp.fit(IcpStart{start}, observed, s.cfg.icp_max_iterations * 2);
       const RefineResult ref =
           refine_on_surface(loc.locator_model(), fit.pose, region.data(), int(region.size()), s.cfg);
       EXPECT_LT(pose_error(model, ref.pose, truth), 5.0) << deg << " deg, " << shift << " mm";
@@ -411,8 +411,8 @@ TEST(StartSlide, BringsAnOffsetStartBackOverTheObservedRidge) {
   const StartSet starts = prepare_starts(lm, cfg);
   ASSERT_EQ(starts.size(), 2 * cfg.initial_rotations * 6);  // 2 directions x 6 turns x 6 yaws (30 deg)
   ASSERT_GT(lm.slide_across_mm, 2 * lm.tube_d_mm);          // a U is wider than two tubes
-  IcpBuffers buf;
-  reserve_icp(&buf, lm, 2000, float(cfg.ridge_cell_mm));
+  SlideBuffers buf;
+  reserve_slide(&buf, lm, 2000, float(cfg.ridge_cell_mm));
   const float d = lm.tube_d_mm;
   Pose truth_frame = Pose::Identity();
   truth_frame.linear() = Eigen::AngleAxisd(0.5, Eigen::Vector3d::UnitZ()).toRotationMatrix();

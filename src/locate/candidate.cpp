@@ -16,9 +16,9 @@ Pose axis_frame(const AxisEstimate& est) {
   return place;
 }
 
-// RidgeFit::seen_through of a fit ridge_icp has just returned (its model ridge is still in buf->icp).
+// RidgeFit::seen_through of a fit RidgeIcp::fit has just returned (its model ridge is still there).
 float seen_through(const CandidateContext& ctx, const RidgeFit& f, const CandidateBuffers& buf) {
-  return seen_through_share(ctx.zb, buf.icp.model_ridge.data(), f.model_ridge_points,
+  return seen_through_share(ctx.zb, buf.icp.model_ridge(), f.model_ridge_points,
                             float(ctx.cfg.verify_tolerance_mm));
 }
 
@@ -95,7 +95,10 @@ void reserve_candidate(CandidateBuffers* buf, const LocatorModel& lm, const Star
                        const LocateConfig& cfg, int max_region_cells, int ridge_capacity, int z_width,
                        int z_height, const Intrinsics& camera) {
   reserve_axis(&buf->ab, max_region_cells, z_width, z_height);
-  reserve_icp(&buf->icp, lm, ridge_capacity, float(cfg.ridge_cell_mm), max_region_cells);
+  reserve_ridge(&buf->ridge, lm.extent_l_mm + 2 * lm.tube_d_mm, float(cfg.ridge_cell_mm),
+                std::max(max_region_cells, int(lm.ridge_samples.size())));
+  buf->icp.reserve(lm, cfg, ridge_capacity);
+  reserve_slide(&buf->slide, lm, ridge_capacity, float(cfg.ridge_cell_mm));
   buf->region_pts.assign(std::size_t(max_region_cells), Eigen::Vector3f::Zero());
   buf->coarse_ridge.assign(std::size_t(ridge_capacity), Eigen::Vector3f::Zero());
   buf->coarse_in_axis.assign(std::size_t(ridge_capacity), Eigen::Vector3f::Zero());
@@ -123,7 +126,7 @@ ObservedRidge observe_ridge(const CandidateContext& ctx, const CandidateInput& i
   for (int k = 0; k < out.region_points; ++k)
     buf->region_pts[std::size_t(k)] = ctx.zb.point(in.cells[k] % w, in.cells[k] / w);
   out.count = extract_zridge(buf->region_pts.data(), out.region_points, axis.axis, float(ctx.cfg.ridge_cell_mm),
-                             kRidgeMinRunOfD * ctx.lm.tube_d_mm, &buf->icp.ridge, in.ridge, in.ridge_capacity,
+                             kRidgeMinRunOfD * ctx.lm.tube_d_mm, &buf->ridge, in.ridge, in.ridge_capacity,
                              ctx.cfg.match_surface);
   buf->times.ridge_icp_ms += ms_since(t);
   return out;
@@ -142,7 +145,7 @@ RidgeFits fit_ridges(const CandidateContext& ctx, const CandidateInput& in, cons
   // The probes rank the starts on coarser ridges of the same region.
   const float probe_cell = starts.cell_mm;
   const int n_coarse = extract_zridge(buf->region_pts.data(), observed.region_points, axis.axis, probe_cell,
-                                      kRidgeMinRunOfD * d, &buf->icp.ridge, buf->coarse_ridge.data(),
+                                      kRidgeMinRunOfD * d, &buf->ridge, buf->coarse_ridge.data(),
                                       in.ridge_capacity, cfg.match_surface);
   // Every start is slid to where it best covers the observed ridge ...
   const Pose axis_to_bin = axis_frame(axis);
@@ -150,11 +153,13 @@ RidgeFits fit_ridges(const CandidateContext& ctx, const CandidateInput& in, cons
   for (int k = 0; k < n_coarse; ++k)
     buf->coarse_in_axis[std::size_t(k)] =
         (bin_to_axis * buf->coarse_ridge[std::size_t(k)].cast<double>()).cast<float>();
-  buf->icp.observed_top.build(buf->coarse_ridge.data(), n_coarse, probe_cell, d);
+  const RidgeView coarse{buf->coarse_ridge.data(), n_coarse, axis.axis, probe_cell};
+  const RidgeView fine_ridge{in.ridge, observed.count, axis.axis, float(cfg.ridge_cell_mm)};
+  buf->slide.observed_top.build(buf->coarse_ridge.data(), n_coarse, probe_cell, d);
   buf->starts.clear();
   for (int s = 0; s < starts.size(); ++s)
     buf->starts.push_back(
-        slide_start(lm, starts, s, axis_to_bin, buf->coarse_in_axis.data(), n_coarse, cfg, &buf->icp));
+        slide_start(lm, starts, s, axis_to_bin, buf->coarse_in_axis.data(), n_coarse, cfg, &buf->slide));
   // ... and those whose ridge covers it best are probed; the most promising continue to convergence.
   std::sort(buf->starts.begin(), buf->starts.end(),
             [](const SlidStart& a, const SlidStart& b) { return a.cost_mm < b.cost_mm; });
@@ -165,9 +170,10 @@ RidgeFits fit_ridges(const CandidateContext& ctx, const CandidateInput& in, cons
       buf->times.ridge_icp_ms += ms_since(t);
       return out;
     }
-    fits.push_back(ridge_icp(lm, st.pose, buf->coarse_ridge.data(), n_coarse, axis.axis, cfg,
-                             cfg.icp_probe_iterations, &buf->icp, -1, probe_cell, starts.ridge(st.start),
-                             starts.ridge_count(st.start)));
+    IcpStart start;
+    start.pose = st.pose;
+    start.model_ridge = starts.ridge(st.start), start.model_ridge_count = starts.ridge_count(st.start);
+    fits.push_back(buf->icp.fit(start, coarse, cfg.icp_probe_iterations));
     fits.back().seen_through = seen_through(ctx, fits.back(), *buf);
   }
   const auto by_rank = [d](const RidgeFit& x, const RidgeFit& y) { return x.rank_cost(d) < y.rank_cost(d); };
@@ -193,9 +199,8 @@ RidgeFits fit_ridges(const CandidateContext& ctx, const CandidateInput& in, cons
     const int left = std::max(1, cfg.icp_max_iterations - f.iterations);
     const int fine = std::min(left, cfg.icp_fine_iterations);
     if (left > fine)  // (not evaluated: the fine iterations go on from its pose at once)
-      f = ridge_icp_steps(lm, f.pose, buf->coarse_ridge.data(), n_coarse, axis.axis, cfg, left - fine, &buf->icp,
-                          f.gate_mm, probe_cell);
-    f = ridge_icp(lm, f.pose, in.ridge, observed.count, axis.axis, cfg, fine, &buf->icp, f.gate_mm);
+      f = buf->icp.steps(IcpStart{f.pose, f.gate_mm}, coarse, left - fine);
+    f = buf->icp.fit(IcpStart{f.pose, f.gate_mm}, fine_ridge, fine);
     f.seen_through = seen_through(ctx, f, *buf);
   }
   fits.resize(std::size_t(keep));

@@ -10,9 +10,11 @@
 
 #include "core/camera.hpp"
 #include "core/clock.hpp"
-#include "locate/icp.hpp"
+#include "locate/ridge_icp.hpp"
 #include "locate/principal_axis.hpp"
 #include "locate/regions.hpp"
+#include "locate/starts.hpp"
+#include "locate/surface_refine.hpp"
 #include "locate/verify.hpp"
 
 namespace pipeloc {
@@ -121,7 +123,9 @@ struct CandidateTimes {
 // Per-thread working memory of the stages, sized once.
 struct CandidateBuffers {
   AxisBuffers ab;
-  IcpBuffers icp;
+  RidgeBuffers ridge;  // for the observed ridges
+  RidgeIcp icp;
+  SlideBuffers slide;
   std::vector<Eigen::Vector3f> region_pts;
   std::vector<Eigen::Vector3f> coarse_ridge;    // the region's Z-ridge on the probes' cells
   std::vector<Eigen::Vector3f> coarse_in_axis;  // the same in the frame of the observed axis
