@@ -65,18 +65,22 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
       {"few ridge points", after_ridge(kMinRidgePoints - 1), true, CandidateOutcome::few_ridge_points, false,
        false, 0},
       {"residual above R_th", after_fits(7.1f), true, CandidateOutcome::residual_too_high, false, false, 0},
-      {"agreement under 0.7", judged(seen(690, 0, 0)), true, CandidateOutcome::not_confirmed, false, false, 0},
-      {"free space over 0.05", judged(seen(900, 51, 0)), true, CandidateOutcome::not_confirmed, false, false, 0},
-      {"nothing judged", [] {
+      {"agreement under 0.7", judged(seen(690, 0, 0)), true, CandidateOutcome::not_confirmed, false, false,
+       0},
+      {"free space over 0.05", judged(seen(900, 51, 0)), true, CandidateOutcome::not_confirmed, false, false,
+       0},
+      {"nothing judged",
+       [] {
          Evidence e = judged(Verification{});
          e.have_best = false;
          return e;
        }(),
        true, CandidateOutcome::not_confirmed, false, false, 0},
       // Accepted: score = agreement * (1 - occluded), halved when ambiguous.
-      {"accepted and pickable", judged(seen(900, 10, 100)), true, CandidateOutcome::accepted, false, true, 0.81f},
-      {"accepted under another pipe", judged(seen(800, 0, 200)), true, CandidateOutcome::accepted, false, false,
-       0.64f},
+      {"accepted and pickable", judged(seen(900, 10, 100)), true, CandidateOutcome::accepted, false, true,
+       0.81f},
+      {"accepted under another pipe", judged(seen(800, 0, 200)), true, CandidateOutcome::accepted, false,
+       false, 0.64f},
       {"rival about as good: ambiguous", judged_with_rival(seen(900, 0, 0), seen(860, 0, 0)), true,
        CandidateOutcome::accepted, true, false, 0.45f},
       {"rival failing by a hair: still ambiguous", judged_with_rival(seen(700, 0, 0), seen(690, 0, 0)), true,

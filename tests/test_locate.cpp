@@ -824,8 +824,8 @@ TEST(WorkerPool, EveryTaskOnceWhetherRunsFollowAtOnceOrAfterAPause) {
       std::atomic<int> count[8];
       std::atomic<int> slow_done{0};
     } run;
-    const auto task = [](void* ctx, int t, int) {
-      Run& r = *static_cast<Run*>(ctx);
+    const auto task = [&run](int t, int) {
+      Run& r = run;
       if (t % 3 == 0) {  // some tasks take a while, so that run() has to wait for them
         const auto until = std::chrono::steady_clock::now() + std::chrono::microseconds(50);
         while (std::chrono::steady_clock::now() < until) {
@@ -838,7 +838,7 @@ TEST(WorkerPool, EveryTaskOnceWhetherRunsFollowAtOnceOrAfterAPause) {
       const int tasks = rep % 9;  // 0 to 8 tasks (0: a run with nothing to do)
       for (auto& c : run.count) c = 0;
       run.slow_done = 0;
-      pool.run(tasks, task, &run);
+      pool.run(tasks, task);
       for (int t = 0; t < 8; ++t) ASSERT_EQ(run.count[t].load(), t < tasks ? 1 : 0) << threads << " " << rep;
       ASSERT_EQ(run.slow_done.load(), (tasks + 2) / 3);
       if (rep % 50 == 49) std::this_thread::sleep_for(std::chrono::milliseconds(2));  // past the spin

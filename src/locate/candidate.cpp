@@ -86,7 +86,8 @@ Decision decide(const Evidence& e, const LocateConfig& cfg) {
   out.outcome = CandidateOutcome::accepted;
   out.ambiguous = e.have_second && hypothesis_quality(e.second) >=
                                        hypothesis_quality(e.best) - float(cfg.ambiguity_quality_margin);
-  out.score = e.best.agreement() * (1.0f - e.best.occluded()) * (out.ambiguous ? kAmbiguousScoreFactor : 1.0f);
+  out.score =
+      e.best.agreement() * (1.0f - e.best.occluded()) * (out.ambiguous ? kAmbiguousScoreFactor : 1.0f);
   out.pickable = !out.ambiguous && e.best.occluded() <= float(cfg.verify_max_occluded);
   return out;
 }
@@ -125,9 +126,9 @@ ObservedRidge observe_ridge(const CandidateContext& ctx, const CandidateInput& i
   const int w = ctx.zb.z.width;
   for (int k = 0; k < out.region_points; ++k)
     buf->region_pts[std::size_t(k)] = ctx.zb.point(in.cells[k] % w, in.cells[k] / w);
-  out.count = extract_zridge(buf->region_pts.data(), out.region_points, axis.axis, float(ctx.cfg.ridge_cell_mm),
-                             kRidgeMinRunOfD * ctx.lm.tube_d_mm, &buf->ridge, in.ridge, in.ridge_capacity,
-                             ctx.cfg.match_surface);
+  out.count = extract_zridge(buf->region_pts.data(), out.region_points, axis.axis,
+                             float(ctx.cfg.ridge_cell_mm), kRidgeMinRunOfD * ctx.lm.tube_d_mm, &buf->ridge,
+                             in.ridge, in.ridge_capacity, ctx.cfg.match_surface);
   buf->times.ridge_icp_ms += ms_since(t);
   return out;
 }

@@ -10,9 +10,9 @@
 
 #include "core/camera.hpp"
 #include "core/clock.hpp"
-#include "locate/ridge_icp.hpp"
 #include "locate/principal_axis.hpp"
 #include "locate/regions.hpp"
+#include "locate/ridge_icp.hpp"
 #include "locate/starts.hpp"
 #include "locate/surface_refine.hpp"
 #include "locate/verify.hpp"
@@ -67,11 +67,11 @@ struct CandidateTrace {
 enum class CandidateStage { axis, observed_ridge, ridge_fits, hypotheses };
 struct Evidence {
   CandidateStage reached = CandidateStage::axis;  // the last stage done
-  float tube_d_mm = 0;                             // D of the model
-  int ridge_points = 0;                            // observed_ridge: observed Z-ridge points
-  float least_ridge_cost_mm = 1e30f;               // ridge_fits: least residual of the states continued
-  bool have_best = false, have_second = false;     // hypotheses: the best judged, and a rival
-  Verification best, second;                       // ... more than ambiguity_pose_mm from it
+  float tube_d_mm = 0;                            // D of the model
+  int ridge_points = 0;                           // observed_ridge: observed Z-ridge points
+  float least_ridge_cost_mm = 1e30f;              // ridge_fits: least residual of the states continued
+  bool have_best = false, have_second = false;    // hypotheses: the best judged, and a rival
+  Verification best, second;                      // ... more than ambiguity_pose_mm from it
 };
 
 struct Decision {

@@ -26,8 +26,8 @@ Locator::Locator(const PipeModel& model, const LocateConfig& cfg, const Intrinsi
                           (cfg.ridge_cell_mm * cfg.ridge_cell_mm)) +
                       16;
   for (Worker& wk : workers_)
-    reserve_candidate(&wk.buf, lm_, starts_, cfg, rb_.max_region_cells, ridge_capacity_, zb_.z.width, zb_.z.height,
-                      camera);
+    reserve_candidate(&wk.buf, lm_, starts_, cfg, rb_.max_region_cells, ridge_capacity_, zb_.z.width,
+                      zb_.z.height, camera);
   ridge_pts_.assign(std::size_t(ridge_capacity_) * cfg.max_candidates, Eigen::Vector3f::Zero());
   slot_.resize(std::size_t(cfg.max_candidates));
   slot_filled_.assign(std::size_t(cfg.max_candidates), 0);
@@ -59,19 +59,13 @@ const LocateOutput& Locator::locate(const Image<float>& depth, const CameraInfo&
   t = Clock::now();
   const int window = std::max(3, int(std::lround(cfg_.normal_window_mm / zb_.pixel_mm)) | 1);
   // Row bands on the pool: each thread its band, with its own running sums.
-  struct NormalTask {
-    Locator* self;
-    int window, min_valid, bands;
-    static void run(void* ctx, int band, int) {
-      const NormalTask& t = *static_cast<const NormalTask*>(ctx);
-      const ZBuffer& zb = t.self->zb_;
-      const int begin = band_begin(band, t.bands, zb.height), end = band_begin(band + 1, t.bands, zb.height);
-      compute_normals_rows(zb, t.window, t.min_valid, begin, end, band, &t.self->nm_);
-      // II-B's upward cells, while the band's normals are at hand (off the regions' serial path).
-      mark_upward_rows(zb, t.self->nm_, t.self->cfg_, begin, end, &t.self->rb_);
-    }
-  } normal_task{this, window, int(cfg_.normal_min_valid_share * window * window), pool_.size()};
-  pool_.run(pool_.size(), &NormalTask::run, &normal_task);
+  const int min_valid = int(cfg_.normal_min_valid_share * window * window), bands = pool_.size();
+  pool_.run(bands, [&](int band, int) {
+    const int begin = band_begin(band, bands, zb_.height), end = band_begin(band + 1, bands, zb_.height);
+    compute_normals_rows(zb_, window, min_valid, begin, end, band, &nm_);
+    // II-B's upward cells, while the band's normals are at hand (off the regions' serial path).
+    mark_upward_rows(zb_, nm_, cfg_, begin, end, &rb_);
+  });
   out_.times.normals_ms = ms_since(t);
 
   // Candidates are independent: the pool works them, best first, until the deadline. They are
@@ -82,12 +76,12 @@ const LocateOutput& Locator::locate(const Image<float>& depth, const CameraInfo&
   for (Worker& wk : workers_) wk.buf.times = {};
   const Clock::time_point start_by =
       deadline == Clock::time_point::max() ? deadline : deadline - ms_duration(candidate_ms_avg_);
-  Frame frame{this, &depth, &camera, bin_to_cam, start_by, deadline};
+  Frame frame{&depth, &camera, bin_to_cam, start_by, deadline};
   for (Worker& wk : workers_) wk.candidates_done = 0, wk.candidate_ms_sum = 0;
   Handout handout;
   handout.frame = &frame;
   handout.t_start = t_start;
-  pool_.run(pool_.size(), &Locator::regions_and_candidates_task, &handout);
+  pool_.run(pool_.size(), [&](int task, int worker) { regions_and_candidates(handout, task, worker); });
   const int n = int(rb_.candidates.size());
   out_.traces.resize(std::size_t(n));
   constexpr double kAverageWeight = 0.2;
@@ -122,13 +116,11 @@ const LocateOutput& Locator::locate(const Image<float>& depth, const CameraInfo&
   return out_;
 }
 
-void Locator::regions_and_candidates_task(void* ctx, int task, int worker) {
-  Handout& h = *static_cast<Handout*>(ctx);
-  Locator& self = *h.frame->self;
+void Locator::regions_and_candidates(Handout& h, int task, int worker) {
   if (task == 0) {  // II-B: this thread grows the regions, handing each out as it is found
     const auto t = Clock::now();
-    self.out_.regions = extract_candidate_regions(
-        self.zb_, self.nm_, self.cfg_, self.lm_.tube_d_mm, self.lm_.extent_l_mm, &self.rb_,
+    out_.regions = extract_candidate_regions(
+        zb_, nm_, cfg_, lm_.tube_d_mm, lm_.extent_l_mm, &rb_,
         [](void* c, int found) {
           Handout& hh = *static_cast<Handout*>(c);
           {
@@ -138,7 +130,7 @@ void Locator::regions_and_candidates_task(void* ctx, int task, int worker) {
           hh.more.notify_all();
         },
         &h);
-    self.out_.times.regions_ms = ms_since(t);
+    out_.times.regions_ms = ms_since(t);
     h.serial_ms = ms_since(h.t_start);
     {
       std::lock_guard<std::mutex> lock(h.mutex);
@@ -154,7 +146,7 @@ void Locator::regions_and_candidates_task(void* ctx, int task, int worker) {
       if (h.next >= h.found) return;
       c = h.next++;
     }
-    candidate_task(h.frame, c, worker);
+    candidate_task(*h.frame, c, worker);
   }
 }
 
@@ -165,68 +157,49 @@ void Locator::build_zbuffer_banded(const Image<float>& depth, const CameraInfo& 
   zb_.width = zb_.height = 0;
   // The buffers were sized for the camera given at construction; callers check frame sizes first.
   if (depth.width != camera_width_ || depth.height != camera_height_) return;
-  struct Bands {
-    Locator* self;
-    const Image<float>* depth;
-    const Intrinsics* k;
-    const Pose* bin_to_cam;
-    int bands;
-    float max_spread_mm;
-    std::atomic<int> filled{0};
-    int lo(int band, int rows) const { return band_begin(band, bands, rows); }
-    int hi(int band, int rows) const { return band_begin(band + 1, bands, rows); }
-    static void points(void* ctx, int band, int) {
-      Bands& b = *static_cast<Bands*>(ctx);
-      zbuffer_points_rows(*b.depth, *b.k, *b.bin_to_cam, b.self->zb_.pixel_mm, b.lo(band, b.depth->height),
-                          b.hi(band, b.depth->height), band, &b.self->zb_points_);
-    }
-    static void splat(void* ctx, int band, int) {
-      Bands& b = *static_cast<Bands*>(ctx);
-      ZBuffer& zb = b.self->zb_;
-      splat_zbuffer_rows(b.self->zb_points_, b.lo(band, zb.height), b.hi(band, zb.height), &zb);
-    }
-    static void collect(void* ctx, int band, int) {
-      Bands& b = *static_cast<Bands*>(ctx);
-      const ZBuffer& zb = b.self->zb_;
-      b.self->band_holes_[std::size_t(band)] =
-          collect_holes_rows(zb, b.lo(band, zb.height), b.hi(band, zb.height), &b.self->holes_);
-    }
-    static void fill(void* ctx, int band, int) {
-      Bands& b = *static_cast<Bands*>(ctx);
-      const ZBuffer& zb = b.self->zb_;
-      b.filled += fill_holes_pass(zb, b.max_spread_mm, b.lo(band, zb.height),
-                                  b.self->band_holes_[std::size_t(band)], &b.self->holes_);
-    }
-    static void apply(void* ctx, int band, int) {
-      Bands& b = *static_cast<Bands*>(ctx);
-      ZBuffer& zb = b.self->zb_;
-      int& count = b.self->band_holes_[std::size_t(band)];
-      count = apply_filled(b.lo(band, zb.height), count, &b.self->holes_, &zb);
-    }
-  } bands{this, &depth, &camera.intrinsics, &bin_to_cam, pool_.size(), float(cfg_.continuity_step_max_mm)};
-  pool_.run(bands.bands, &Bands::points, &bands);
-  out_.valid_pixels = place_zbuffer(zb_points_, bands.bands, &zb_);
+  const int bands = pool_.size();
+  const auto lo = [bands](int band, int rows) { return band_begin(band, bands, rows); };
+  const auto hi = [bands](int band, int rows) { return band_begin(band + 1, bands, rows); };
+  const Intrinsics& k = camera.intrinsics;
+  pool_.run(bands, [&](int band, int) {
+    zbuffer_points_rows(depth, k, bin_to_cam, zb_.pixel_mm, lo(band, depth.height), hi(band, depth.height),
+                        band, &zb_points_);
+  });
+  out_.valid_pixels = place_zbuffer(zb_points_, bands, &zb_);
   if (out_.valid_pixels == 0) return;
-  pool_.run(bands.bands, &Bands::splat, &bands);
+  pool_.run(bands, [&](int band, int) {
+    splat_zbuffer_rows(zb_points_, lo(band, zb_.height), hi(band, zb_.height), &zb_);
+  });
   // Holes of up to hole_fill_mm are filled from both sides: half of it in passes of one cell.
   const int passes = int(std::lround(cfg_.hole_fill_mm / 2 / zb_.pixel_mm));
-  if (passes > 0) pool_.run(bands.bands, &Bands::collect, &bands);
+  if (passes > 0)
+    pool_.run(bands, [&](int band, int) {
+      band_holes_[std::size_t(band)] =
+          collect_holes_rows(zb_, lo(band, zb_.height), hi(band, zb_.height), &holes_);
+    });
+  const float max_spread_mm = float(cfg_.continuity_step_max_mm);
+  std::atomic<int> filled{0};
   for (int pass = 0; pass < passes; ++pass) {
-    bands.filled = 0;
-    pool_.run(bands.bands, &Bands::fill, &bands);
-    if (bands.filled == 0) break;
-    pool_.run(bands.bands, &Bands::apply, &bands);
+    filled = 0;
+    pool_.run(bands, [&](int band, int) {
+      filled +=
+          fill_holes_pass(zb_, max_spread_mm, lo(band, zb_.height), band_holes_[std::size_t(band)], &holes_);
+    });
+    if (filled == 0) break;
+    pool_.run(bands, [&](int band, int) {
+      int& count = band_holes_[std::size_t(band)];
+      count = apply_filled(lo(band, zb_.height), count, &holes_, &zb_);
+    });
   }
 }
 
-void Locator::candidate_task(void* frame, int c, int worker) {
-  const Frame& f = *static_cast<const Frame*>(frame);
+void Locator::candidate_task(const Frame& f, int c, int worker) {
   // f.deadline is the real one less an average candidate: a candidate is only begun if it is
   // expected to end in time (the trace stays "budget" otherwise).
-  if (f.self->out_of_time(f.deadline)) return;
-  Worker& wk = f.self->workers_[std::size_t(worker)];
+  if (out_of_time(f.deadline)) return;
+  Worker& wk = workers_[std::size_t(worker)];
   const auto t0 = Clock::now();
-  f.self->work_candidate(c, wk, f);
+  work_candidate(c, wk, f);
   ++wk.candidates_done;
   wk.candidate_ms_sum += ms_since(t0);
 }

@@ -61,7 +61,6 @@ class Locator {
     double candidate_ms_sum = 0;
   };
   struct Frame {  // what the candidate tasks of one locate() share
-    Locator* self;
     const Image<float>* depth;
     const CameraInfo* camera;
     Pose bin_to_cam;
@@ -78,8 +77,8 @@ class Locator {
     bool regions_done = false;
     double serial_ms = 0;  // from the start of the cycle to the last region
   };
-  static void regions_and_candidates_task(void* handout, int task, int worker);
-  static void candidate_task(void* frame, int c, int worker);
+  void regions_and_candidates(Handout& h, int task, int worker);
+  void candidate_task(const Frame& f, int c, int worker);
   void work_candidate(int c, Worker& wk, const Frame& f);
   void merge_estimate(int c);
   // Row bands of the frame-wide stages: band b of n covers rows [band_begin(b), band_begin(b + 1)).

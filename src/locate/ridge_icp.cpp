@@ -58,7 +58,8 @@ void RidgeIcp::reserve(const LocatorModel& lm, const LocateConfig& cfg, int max_
 }
 
 int RidgeIcp::place_model_ridge(const Pose& pose, const Eigen::Vector2f& axis, float cell_mm) {
-  return posed_model_ridge(*lm_, pose, axis, cell_mm, *cfg_, &ridge_, model_ridge_.data(), int(model_ridge_.size()));
+  return posed_model_ridge(*lm_, pose, axis, cell_mm, *cfg_, &ridge_, model_ridge_.data(),
+                           int(model_ridge_.size()));
 }
 
 // Nearest partners both ways between the model's ridge (model_ridge_[0..nm)) and the observed

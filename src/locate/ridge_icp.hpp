@@ -23,7 +23,6 @@ struct RidgeFit {
   float rank_cost(float d) const { return cost_mm + seen_through * d; }
 };
 
-
 // The model's Z-ridge at `pose` (model -> bin) across `axis`, in cells of cell_mm: at most
 // `capacity` points to out, bin frame; returns their count.
 int posed_model_ridge(const LocatorModel& lm, const Pose& pose, const Eigen::Vector2f& axis, float cell_mm,

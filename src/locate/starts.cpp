@@ -61,8 +61,7 @@ StartSet prepare_starts(const LocatorModel& lm, const LocateConfig& cfg) {
         const int n = posed_model_ridge(lm, pose, x_axis, set.cell_mm, cfg, &rb, ridge.data(), capacity);
         const Pose to_model = pose.inverse();
         for (int i = 0; i < n; ++i)
-          set.ridge_model.push_back(
-              (to_model * ridge[std::size_t(i)].cast<double>()).cast<float>());
+          set.ridge_model.push_back((to_model * ridge[std::size_t(i)].cast<double>()).cast<float>());
         set.ridge_begin.push_back(int(set.ridge_model.size()));
         set.top.emplace_back();
         set.top.back().reserve(side);
@@ -73,7 +72,8 @@ StartSet prepare_starts(const LocatorModel& lm, const LocateConfig& cfg) {
 }
 
 SlidStart slide_start(const LocatorModel& lm, const StartSet& starts, int s, const Pose& axis_to_bin,
-                      const Eigen::Vector3f* obs_axis, int n_obs, const LocateConfig& cfg, SlideBuffers* buf) {
+                      const Eigen::Vector3f* obs_axis, int n_obs, const LocateConfig& cfg,
+                      SlideBuffers* buf) {
   SlidStart out;
   out.start = s;
   out.pose = axis_to_bin * starts.pose[std::size_t(s)];
