@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include "model/make_pipe.hpp"
 #include "score/mssd.hpp"
 #include "score/scorer.hpp"
@@ -141,6 +143,88 @@ TEST_F(ScorerTest, DuplicateEstimatesCountAgainstPrecision) {
   EXPECT_EQ(r.malformed_rows, 2);
   // Image 1 has no estimate: it counts as a miss for best-correct.
   EXPECT_DOUBLE_EQ(r.overall.best_correct(5), 0.5);
+}
+
+// What the PLC gets: one pose per image at most (eval-bop --picks), scored against the pipes
+// covered at most 15 %.
+TEST_F(ScorerTest, PicksCountRateCorrectAndWrongByDistance) {
+  const Data& d = data()["sbend"];
+  const int im = d.gt.begin()->first;
+  const int best = most_visible(d, im);
+  ASSERT_LE(d.info.at(im)[best].occ_by_pipes, 0.15);
+  int images_with_top = 0;
+  for (const auto& [i, info] : d.info)
+    images_with_top += std::any_of(info.begin(), info.end(), [](const GtInfo& g) { return g.top; });
+  ASSERT_EQ(images_with_top, 2);
+  for (const double delta : {4.0, 7.0, 12.0}) {
+    ResultsFile picks;  // one image gets a pick, the other none (DONE_NONE)
+    Pose p = d.gt.at(im)[best].model_to_cam;
+    p.translation() += Eigen::Vector3d(0.0, 0.6, 0.8) * delta;
+    picks.rows.push_back({1, im, 1, 1.0, p, 0.01});
+    const ScoreReport r = score_results(d.dir->path(), truth_as_results(d), {}, &picks);
+    ASSERT_TRUE(r.has_picks);
+    EXPECT_EQ(r.overall.pick_images, 2);
+    EXPECT_EQ(r.overall.picked_images, 1);
+    EXPECT_DOUBLE_EQ(r.overall.pick_rate(), 0.5);
+    EXPECT_EQ(r.overall.picks, 1);
+    EXPECT_EQ(r.overall.pick_correct_5, delta < 5 ? 1 : 0) << delta;
+    EXPECT_EQ(r.overall.wrong_picks, delta > 10 ? 1 : 0) << delta;
+    // The other columns are today's: the truth as results still scores one.
+    EXPECT_DOUBLE_EQ(r.overall.top_recall(5), 1.0);
+  }
+}
+
+TEST_F(ScorerTest, PickOfAPipeCoveredMoreThan15PercentIsNotCorrect) {
+  const Data& d = data()["sbend"];
+  ResultsFile picks;
+  for (const auto& [im, info] : d.info) {
+    for (std::size_t i = 0; i < info.size(); ++i) {
+      // The first pipe covered more than 15 % in each image, picked exactly.
+      if (info[i].occ_by_pipes <= 0.15) continue;
+      picks.rows.push_back({1, im, 1, 1.0, d.gt.at(im)[i].model_to_cam, 0.01});
+      break;
+    }
+  }
+  ASSERT_EQ(picks.rows.size(), 2u);
+  const ScoreReport r = score_results(d.dir->path(), ResultsFile{}, {}, &picks);
+  EXPECT_EQ(r.overall.picks, 2);
+  EXPECT_EQ(r.overall.pick_correct_5, 0);
+  EXPECT_EQ(r.overall.wrong_picks, 2);
+  EXPECT_DOUBLE_EQ(r.overall.pick_rate(), 1.0);
+}
+
+TEST_F(ScorerTest, PickOfASymmetricPipesTwinIsCorrect) {
+  const Data& d = data()["torus"];
+  ResultsFile picks;
+  for (const auto& [im, poses] : d.gt)
+    picks.rows.push_back(
+        {1, im, 1, 1.0, poses[most_visible(d, im)].model_to_cam * d.model->symmetries[0], 0.01});
+  const ScoreReport r = score_results(d.dir->path(), ResultsFile{}, {}, &picks);
+  EXPECT_EQ(r.overall.picks, 2);
+  EXPECT_DOUBLE_EQ(r.overall.pick_correct_5mm(), 1.0);
+  EXPECT_EQ(r.overall.wrong_picks, 0);
+}
+
+TEST_F(ScorerTest, PickFiguresAppearInTableAndJsonOnlyWithPicks) {
+  const Data& d = data()["sbend"];
+  const ScoreReport without = score_results(d.dir->path(), truth_as_results(d));
+  EXPECT_EQ(format_report(without).find("pick_rate"), std::string::npos);
+  EXPECT_FALSE(report_to_json(without)["overall"].contains("pick_rate"));
+  ResultsFile picks;
+  const int im = d.gt.begin()->first;
+  picks.rows.push_back({1, im, 1, 1.0, d.gt.at(im)[most_visible(d, im)].model_to_cam, 0.01});
+  picks.rows.push_back(
+      {1, im, 1, 0.5, d.gt.at(im)[most_visible(d, im)].model_to_cam, 0.01});  // a second: extra
+  picks.rows.push_back({7, 0, 1, 0.5, Pose::Identity(), 0.01});               // an image not in the targets
+  const ScoreReport with = score_results(d.dir->path(), truth_as_results(d), {}, &picks);
+  EXPECT_EQ(with.pick_rows_extra, 1);
+  EXPECT_EQ(with.pick_rows_outside_targets, 1);
+  EXPECT_NE(format_report(with).find("pick_rate"), std::string::npos);
+  const Json j = report_to_json(with);
+  EXPECT_DOUBLE_EQ(j["overall"]["pick_rate"].get<double>(), 0.5);
+  EXPECT_DOUBLE_EQ(j["overall"]["pick_correct_5mm"].get<double>(), 1.0);
+  EXPECT_EQ(j["overall"]["wrong_picks"].get<int>(), 0);
+  EXPECT_EQ(j["per_object"]["1"]["picks"].get<int>(), 1);
 }
 
 }  // namespace

@@ -10,6 +10,10 @@ namespace pipeloc {
 namespace {
 
 constexpr double kDeg = M_PI / 180.0;
+// bin_for_pile: a pipe up to this share of the bin's shorter side still fits in most drops (the
+// drops that leave the bin are tried again), and a pile spreads over about this many layers.
+constexpr double kLengthShareOfSide = 0.6;
+constexpr double kLayers = 3;
 
 // Model rotation that lays the pipe flat: its direction of least spread points up.
 Eigen::Matrix3d lying_rotation(const PipeModel& model) {
@@ -47,6 +51,27 @@ struct Dropper {
 };
 
 }  // namespace
+
+BinSpec bin_for_pile(const PipeModel& model, const PileParams& params) {
+  // Footprint of the pipe lying flat: its two largest spreads.
+  const Eigen::Matrix3d lying = lying_rotation(model);
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e18), hi = -lo;
+  for (const auto& p : model.surface.points) {
+    const Eigen::Vector3d q = lying * p.cast<double>();
+    lo = lo.cwiseMin(q), hi = hi.cwiseMax(q);
+  }
+  const double length = std::max(hi.x() - lo.x(), hi.y() - lo.y());
+  const double footprint = (hi.x() - lo.x()) * (hi.y() - lo.y());
+  const BinSpec& base = params.bin;
+  const double shorter = std::min(base.inner_x_mm, base.inner_y_mm);
+  const double scale =
+      std::max({1.0, length / (kLengthShareOfSide * shorter),
+                std::sqrt(params.pipes * footprint / (kLayers * base.inner_x_mm * base.inner_y_mm))});
+  BinSpec bin = base;
+  bin.inner_x_mm = std::ceil(base.inner_x_mm * scale);
+  bin.inner_y_mm = std::ceil(base.inner_y_mm * scale);
+  return scale > 1.0 ? bin : base;
+}
 
 Mesh make_bin_mesh(const BinSpec& bin) {
   Mesh mesh;

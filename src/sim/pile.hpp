@@ -24,6 +24,12 @@ struct PileParams {
   double drop_spread = 0.6;    // pipes are dropped over this share of the bin's width and length
 };
 
+// The bin grown (never shrunk, same proportions) so that `pipes` of this pipe fit: the pipe's
+// longest extent at most 0.6 x the shorter side (most drops stay inside), and the floor holds
+// the pile in about three layers (pipes x the lying pipe's footprint <= 3 x floor). Returns
+// params.bin when it is large enough already (the paper's pipes in piles of 20).
+BinSpec bin_for_pile(const PipeModel& model, const PileParams& params);
+
 std::vector<Pose> build_pile(const PipeModel& model, const PileParams& params, std::mt19937& rng);
 
 // The bin as a mesh in the world frame: floor and four walls.
