@@ -227,5 +227,36 @@ TEST_F(ScorerTest, PickFiguresAppearInTableAndJsonOnlyWithPicks) {
   EXPECT_EQ(j["per_object"]["1"]["picks"].get<int>(), 1);
 }
 
+TEST(TubeTurns, StraightTubeIsTheSameUnderAnyTurnAboutItsAxis) {
+  PipeSpec spec;
+  spec.diameter_mm = 45;
+  spec.segments = parse_centreline("S120");
+  const PipeModel tube = derive_pipe_model(make_pipe(spec), "tube");
+  std::vector<Eigen::Vector3d> v;
+  for (const auto& p : tube.mesh.vertices) v.push_back(p.cast<double>());
+  const std::vector<Pose> turns = with_tube_turns(v, tube.symmetries);
+  EXPECT_EQ(turns.size(), tube.symmetries.size() + 71 * (1 + tube.symmetries.size()));
+  // A pose turned 37 degrees about the tube's axis (through the centroid, along its length).
+  Pose truth = Pose::Identity();
+  truth.translation() = Eigen::Vector3d(10, -20, 900);
+  const Eigen::Vector3d c = tube.centroid.cast<double>();
+  Eigen::Vector3d lo = v[0], hi = v[0];
+  for (const auto& p : v) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+  Eigen::Index longest;
+  (hi - lo).maxCoeff(&longest);
+  Pose turn = Pose::Identity();
+  turn.linear() = Eigen::AngleAxisd(37 * M_PI / 180, Eigen::Vector3d::Unit(longest)).toRotationMatrix();
+  turn.translation() = c - turn.linear() * c;
+  const Pose est = truth * turn;
+  EXPECT_GT(mssd(v, est, truth, tube.symmetries, 1e9), 10.0);  // without the turns: a miss
+  EXPECT_LT(mssd(v, est, truth, turns, 1e9), 1.0);
+  // A bent pipe gets no turns.
+  spec.segments = parse_centreline("S40,B90r60,S40");
+  const PipeModel elbow = derive_pipe_model(make_pipe(spec), "elbow");
+  std::vector<Eigen::Vector3d> ev;
+  for (const auto& p : elbow.mesh.vertices) ev.push_back(p.cast<double>());
+  EXPECT_EQ(with_tube_turns(ev, elbow.symmetries).size(), elbow.symmetries.size());
+}
+
 }  // namespace
 }  // namespace pipeloc

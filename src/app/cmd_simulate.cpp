@@ -48,9 +48,13 @@ void add_simulate(CLI::App& app) {
     }
     scene.sensor = sensor_model(opt->sensor);
     scene.pile.bin = bin_for_pile(model, scene.pile);
-    spdlog::info("bin {:.0f} x {:.0f} mm, {} sensor, camera {:.0f}-{:.0f} mm above the floor",
-                 scene.pile.bin.inner_x_mm, scene.pile.bin.inner_y_mm, opt->sensor,
-                 scene.camera_height_min_mm, scene.camera_height_max_mm);
+    const PileSize size = pile_size(model, scene.pile);
+    spdlog::info(
+        "bin {:.0f} x {:.0f} mm (pipe {:.0f} mm long, {:.0f} mm thick lying; pile {:.0f} mm high on "
+        "average), {} "
+        "sensor, camera {:.0f}-{:.0f} mm above the floor",
+        scene.pile.bin.inner_x_mm, scene.pile.bin.inner_y_mm, size.length_mm, size.thickness_mm,
+        size.mean_height_mm, opt->sensor, scene.camera_height_min_mm, scene.camera_height_max_mm);
     const auto t0 = std::chrono::steady_clock::now();
     write_simulated_dataset(model, opt->req);
     const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

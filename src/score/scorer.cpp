@@ -110,6 +110,7 @@ ScoreReport score_results(const std::string& dataset, const ResultsFile& results
         o.symmetries = info->second.symmetries;
         report.object_names[t.obj_id] = info->second.name;
       }
+      o.symmetries = with_tube_turns(o.vertices, o.symmetries);
     }
     if (!scene_gt.count(t.scene_id)) {
       scene_gt[t.scene_id] = read_scene_gt(scene_dir(dataset, t.scene_id) + "/scene_gt.json");

@@ -21,6 +21,7 @@ SimSource::SimSource(const PipeModel& model, const SimSourceConfig& cfg)
   params_.pile.bin = bin_for_pile(model, params_.pile);
   for (std::size_t i = 0; i < model.mesh.vertices.size(); i += 4)
     vertices_.push_back(model.mesh.vertices[i].cast<double>());
+  pick_symmetries_ = with_tube_turns(vertices_, model.symmetries);
   if (!cfg.truth_file.empty() && !(truth_ = std::fopen(cfg.truth_file.c_str(), "w")))
     throw SourceError("source.sim.truth_file '" + cfg.truth_file + "': cannot write");
   fill_bin();
@@ -75,7 +76,7 @@ void SimSource::picked(const Pose& model_to_cam) {
   int best = -1;
   double best_err = kPickMatchMm;
   for (std::size_t i = 0; i < pile_.size(); ++i) {
-    const double err = mssd(vertices_, model_to_cam, world_to_cam_ * pile_[i], model_.symmetries, best_err);
+    const double err = mssd(vertices_, model_to_cam, world_to_cam_ * pile_[i], pick_symmetries_, best_err);
     if (err <= best_err) {
       best_err = err;
       best = int(i);
