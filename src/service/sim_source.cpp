@@ -21,7 +21,10 @@ SimSource::SimSource(const PipeModel& model, const SimSourceConfig& cfg)
   params_.pile.bin = bin_for_pile(model, params_.pile);
   for (std::size_t i = 0; i < model.mesh.vertices.size(); i += 4)
     vertices_.push_back(model.mesh.vertices[i].cast<double>());
-  pick_symmetries_ = with_tube_turns(vertices_, model.symmetries);
+  // The tube's axis from every vertex: a subset need not be centred on it.
+  std::vector<Eigen::Vector3d> all;
+  for (const auto& v : model.mesh.vertices) all.push_back(v.cast<double>());
+  pick_symmetries_ = with_tube_turns(all, model.symmetries);
   if (!cfg.truth_file.empty() && !(truth_ = std::fopen(cfg.truth_file.c_str(), "w")))
     throw SourceError("source.sim.truth_file '" + cfg.truth_file + "': cannot write");
   fill_bin();
