@@ -4,13 +4,12 @@
 # that the table is printed and every figure is in range; not how good the localizer is.
 set -euo pipefail
 bin="$1"
-port_offset="${2:-100}"
 here="$(cd "$(dirname "$0")/../.." && pwd)"
 work="$(mktemp -d)"
 trap 'rm -rf "$work"' EXIT
 fail() { echo "FAIL: $*" >&2; exit 1; }
 
-"$here/tools/zoo" --bin "$bin" --out "$work/zoo" --shapes 15,20 --images 2 --jobs 2 --port-offset "$port_offset" \
+"$here/tools/zoo" --bin "$bin" --out "$work/zoo" --shapes 15,20 --images 2 --jobs 2 \
   --json "$work/zoo.json" > "$work/zoo.txt" 2>&1 || fail "tools/zoo failed: $(tail -20 "$work/zoo.txt")"
 grep -qE '^15-arc ' "$work/zoo.txt" || fail "no row for 15-arc: $(cat "$work/zoo.txt")"
 grep -q '^overall: recall@5' "$work/zoo.txt" || fail "no overall line: $(cat "$work/zoo.txt")"
