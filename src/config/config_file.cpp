@@ -1,5 +1,6 @@
 #include "config/config_file.hpp"
 
+#include <arpa/inet.h>
 #include <toml++/toml.h>
 
 #include <filesystem>
@@ -84,6 +85,26 @@ class Section {
     for (std::size_t i = 0; i < dst->size(); ++i) s << (i ? ", " : "") << (*dst)[i];
     s << "]";
     record(key, s.str(), unit);
+  }
+  // A list of strings, each checked by `valid` (which says what was expected when it is not).
+  void texts(const char* key, std::vector<std::string>* dst, bool (*valid)(const std::string&),
+             const char* expected) {
+    if (const toml::node* n = take(key)) {
+      const toml::array* a = n->as_array();
+      if (!a) fail(file_, full(key), std::string("expected an array of ") + expected);
+      dst->clear();
+      for (const toml::node& e : *a) {
+        const auto v = e.value_exact<std::string>();
+        if (!v || !valid(*v))
+          fail(file_, full(key),
+               std::string("expected an array of ") + expected +
+                   (v ? ", got \"" + *v + "\"" : std::string(", got a non-string")));
+        dst->push_back(*v);
+      }
+    }
+    std::string s = "[";
+    for (std::size_t i = 0; i < dst->size(); ++i) s += (i ? ", \"" : "\"") + (*dst)[i] + "\"";
+    record(key, s + "]", "");
   }
   void triple(const char* key, std::array<double, 3>* dst, const char* unit) {
     std::vector<double> v(dst->begin(), dst->end());
@@ -241,6 +262,11 @@ void read_source(const std::string& file, const toml::table* t, std::vector<std:
   on.finish();
 }
 
+bool is_ipv4_address(const std::string& text) {
+  in_addr a{};
+  return inet_pton(AF_INET, text.c_str(), &a) == 1;
+}
+
 void read_plc(Section& s, PlcConfig* p) {
   s.text("mode", &p->mode, {"server", "client", "none"});
   s.text("address", &p->address, {}, false);
@@ -250,6 +276,9 @@ void read_plc(Section& s, PlcConfig* p) {
   s.integer("max_clients", &p->max_clients, 1, 64, "connections");
   s.integer("poll_ms", &p->poll_ms, 5, 10000, "ms");
   s.integer("reconnect_max_ms", &p->reconnect_max_ms, 100, 600000, "ms");
+  s.integer("request_timeout_ms", &p->request_timeout_ms, 10, 60000, "ms");
+  s.integer("idle_timeout_ms", &p->idle_timeout_ms, 100, 86400000, "ms");
+  s.texts("plc_addresses", &p->plc_addresses, is_ipv4_address, "IPv4 addresses such as \"192.168.0.10\"");
   s.integer("byte_timeout_ms", &p->byte_timeout_ms, 10, 5000, "ms");
   std::string order = word_order_name(p->encoding.order);
   s.text("word_order", &order, {"ABCD", "CDAB", "BADC", "DCBA"});
