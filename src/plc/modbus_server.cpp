@@ -96,6 +96,14 @@ void ModbusServer::publish(const reg::Result& r, std::uint16_t ack_id) {
   reg::write_result(r, ack_id, cfg_.encoding, map());
 }
 void ModbusServer::heartbeat() { ++map()[reg::kHeartbeat]; }
+std::string ModbusServer::describe() const {
+  return "Modbus TCP server on " + cfg_.address + ":" + std::to_string(port_) + ", registers " +
+         std::to_string(cfg_.base) + ".." + std::to_string(cfg_.base + reg::kSize - 1) + ", " +
+         word_order_name(cfg_.encoding.order) + (cfg_.encoding.scaled_int32 ? " scaled int32" : " float32") +
+         ", up to " + std::to_string(cfg_.max_clients) + " clients" +
+         (cfg_.plc_addresses.empty() ? "" : ", the PLC at " + cfg_.plc_addresses.front() +
+                                                (cfg_.plc_addresses.size() > 1 ? " and others" : ""));
+}
 
 // Makes room for one more connection when every slot is taken: the connection quiet the longest
 // goes, never one from the PLC's addresses for anyone else. False: no room (all slots are the PLC's).

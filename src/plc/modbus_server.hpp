@@ -14,25 +14,12 @@
 #pragma once
 
 #include <cstdint>
-#include <stdexcept>
 #include <vector>
 
-#include "config/config_file.hpp"
-#include "core/clock.hpp"
 #include "plc/modbus_request.hpp"
-#include "plc/register_map.hpp"
+#include "plc/plc_link.hpp"
 
 namespace pipeloc {
-
-struct PlcError : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
-
-// A command the PLC submitted: REQ_ID changed.
-struct PlcRequest {
-  std::uint16_t command = 0, req_id = 0;
-  Clock::time_point at{};
-};
 
 // Connection messages: at most kBurst lines per kWindowS, then one line saying how many were left out.
 class LogLimiter {
@@ -47,23 +34,24 @@ class LogLimiter {
   long left_out_ = 0;
 };
 
-class ModbusServer {
+class ModbusServer : public PlcLink {
  public:
   static constexpr int kListenBacklog = 256;
   static constexpr int kRequestsPerRound = 16;  // per connection, so pipelining cannot starve others
 
   explicit ModbusServer(const PlcConfig& cfg);  // binds and listens; throws PlcError naming address:port
-  ~ModbusServer();
+  ~ModbusServer() override;
   ModbusServer(const ModbusServer&) = delete;
   ModbusServer& operator=(const ModbusServer&) = delete;
 
   // Serves requests until one submits a command (returned in *req), `wake_fd` becomes readable,
   // or timeout_ms pass. Returns true when *req holds a new command.
-  bool poll(int timeout_ms, int wake_fd, PlcRequest* req);
+  bool poll(int timeout_ms, int wake_fd, PlcRequest* req) override;
 
-  void set_busy();
-  void publish(const reg::Result& result, std::uint16_t ack_id);
-  void heartbeat();
+  void set_busy() override;
+  void publish(const reg::Result& result, std::uint16_t ack_id) override;
+  void heartbeat() override;
+  std::string describe() const override;
   int clients() const { return int(conns_.size()); }
   int port() const { return port_; }
   const std::uint16_t* registers() const;
