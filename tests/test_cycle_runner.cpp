@@ -86,5 +86,22 @@ TEST(CycleRunner, AnExceptionInTheCycleStopsItAndTurnsItUnhealthy) {
   EXPECT_FALSE(runner.take_result(&p));
 }
 
+
+// A LOCATE queued behind another command (REQ_ID changed while BUSY) starts after its trigger by
+// up to a whole cycle. Its budget counts from when it starts: it is tried, not failed with
+// ERROR 3 at once (today's main: budget_exhausted, no candidate tried).
+TEST(CycleRunner, AQueuedLocateGetsItsWholeBudget) {
+  test::TempDir dir;
+  AppConfig cfg = test::sim_config(dir, 8, 21);
+  cfg.service.budget_ms = 3000;
+  Service service(cfg, sbend(), std::make_unique<SimSource>(sbend(), cfg.source.sim));
+  const Clock::time_point queued_at = Clock::now() - std::chrono::milliseconds(3100);
+  const reg::Result& r = service.run(std::uint16_t(reg::Command::locate), 1, queued_at);
+  EXPECT_TRUE(r.status == reg::Status::done_ok || r.status == reg::Status::done_none) << int(r.error);
+  EXPECT_GT(service.record().tried, 0);
+  EXPECT_GE(service.record().queued_ms, 3100.0);
+  EXPECT_GE(service.record().cycle_ms, 3100.0);  // CYCLE_MS: from the PLC's trigger
+}
+
 }  // namespace
 }  // namespace pipeloc

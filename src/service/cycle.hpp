@@ -13,6 +13,7 @@ struct CycleRecord {
   std::uint64_t cycle = 0;  // LOCATE cycles so far (this one included)
   std::uint16_t command = 0, req_id = 0;
   double trigger_unix_ms = 0;  // wall clock at the trigger
+  double queued_ms = 0;        // trigger to the start of the cycle (waiting behind another command)
   double grab_ms = 0;          // trigger to frame in hand
   double frame_age_ms = 0;     // frame capture to result
   StageTimes stages;           // of the localizer

@@ -114,7 +114,11 @@ void Service::locate(Clock::time_point trigger) {
   ++cycles_;
   ranked_.clear();
   index_ = -1;
-  const Clock::time_point deadline = trigger + ms_duration(cfg_.service.budget_ms);
+  // The budget counts from when the cycle starts: a LOCATE queued behind another command (REQ_ID
+  // changed while BUSY) gets all of it. The frame is still one taken after the PLC's trigger.
+  const Clock::time_point started = Clock::now();
+  record_.queued_ms = ms_between(trigger, started);
+  const Clock::time_point deadline = started + ms_duration(cfg_.service.budget_ms);
 
   GrabStatus grab = source_->grab(trigger, deadline, &frame_);
   // A frame from before the trigger is never localized: it could show a pipe already picked.
