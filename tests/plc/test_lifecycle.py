@@ -42,11 +42,18 @@ class StartUp(unittest.TestCase):
              "no-such-device"),
             ("[model]\npreset = \"sbend\"\n[locate]\nthreads = 0\n", "locate.threads"),
             ("[model]\npreset = \"sbend\"\nmodel = 3\n", "model.model"),
+            ("[model]\npreset = \"sbend\"\n[plc]\naddress = \"localhost\"\n", "plc.address"),
+            ("[model]\npreset = \"sbend\"\n[plc]\naddress = \"999.1.1.1\"\n", "plc.address"),
+            ("[model]\npreset = \"sbend\"\n[plc]\nrobot_from_camera = [2,0,0,0, 0,2,0,0, 0,0,2,0, 0,0,0,1]\n",
+             "plc.robot_from_camera"),
         ]
         for text, named in cases:
             code, out, path = serve_with(text)
             self.assertNotEqual(code, 0, text)
             self.assertIn(named, out, text)
+            if named.startswith("plc."):
+                self.assertEqual(code, 2, text)  # a config error: exit 2, never "ready"
+                self.assertNotIn("ready", out, text)
             self.assertNotIn("Segmentation", out)
         with socket.socket() as taken:  # a port somebody else holds
             taken.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)  # TIME_WAIT of an earlier run
