@@ -87,12 +87,10 @@ const reg::Result& Service::run(std::uint16_t command, std::uint16_t req_id, Clo
       }
       break;
     case std::uint16_t(reg::Command::clear_error):
+      // Only the error goes: the poses of the last LOCATE stay, and NEXT presents the next one
+      // (a PLC clears a fault of its own, e.g. a failed grip, and goes on with the same frame).
       result_.status = reg::Status::ready;
       result_.error = reg::Error::none;
-      index_ = -1;
-      ranked_.clear();
-      result_.count = 0;
-      result_.index = 0;
       break;
     default:
       result_.status = reg::Status::error;

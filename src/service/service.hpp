@@ -29,7 +29,8 @@ class Service {
 
   // Runs the PLC command `command` (CMD register) submitted at `trigger`:
   // LOCATE captures a frame taken after the trigger and localizes within service.budget_ms;
-  // NEXT presents the next pose of the last LOCATE; CLEAR_ERROR returns to READY.
+  // NEXT presents the next pose of the last LOCATE; CLEAR_ERROR returns to READY, keeping the
+  // poses of the last LOCATE for NEXT.
   const reg::Result& run(std::uint16_t command, std::uint16_t req_id, Clock::time_point trigger);
   // After the result is published (outside the cycle): every log.overlay_every LOCATEs the
   // integrator's picture of the frame is written, and the simulated bin loses the pipe handed out.
