@@ -5,6 +5,7 @@
 
 #include <atomic>
 #include <csignal>
+#include <cstring>
 #include <memory>
 
 #include "app/commands.hpp"
@@ -18,7 +19,11 @@ namespace pipeloc::app {
 namespace {
 
 std::atomic<bool> g_stop{false};
-extern "C" void on_signal(int) { g_stop = true; }
+std::atomic<int> g_signal{0};
+extern "C" void on_signal(int sig) {
+  g_signal = sig;
+  g_stop = true;
+}
 
 void install_signal_handlers() {
   struct sigaction sa {};
@@ -26,12 +31,15 @@ void install_signal_handlers() {
   sigemptyset(&sa.sa_mask);
   sigaction(SIGTERM, &sa, nullptr);
   sigaction(SIGINT, &sa, nullptr);
+  sigaction(SIGHUP, &sa, nullptr);  // a closed terminal or `systemctl kill -s HUP`: stop cleanly too
   std::signal(SIGPIPE, SIG_IGN);
 }
 
 void log_result(const Published& p) {
   const reg::Result& r = p.result;
-  if (r.status == reg::Status::done_ok && r.pose)
+  if (p.record.cut_by_shutdown)
+    spdlog::info("req {}: cut short by shutdown after {:.0f} ms", p.ack_id, p.record.cycle_ms);
+  else if (r.status == reg::Status::done_ok && r.pose)
     spdlog::info(
         "req {}: {} pose {}/{} x {:.1f} y {:.1f} z {:.1f} mm, r {:.1f} {:.1f} {:.1f} deg, score {:.3f}, "
         "cycle {} ms",
@@ -119,7 +127,8 @@ int serve(const Options& opt) {
   }
   // deactivate
   sd_notify_send("STOPPING=1");
-  spdlog::info("stopping: {}", g_stop ? "signal" : runner.failed() ? "the cycle thread failed" : "cycle count reached");
+  spdlog::info("stopping: {}", g_stop ? strsignal(g_signal.load())
+                               : runner.failed() ? "the cycle thread failed" : "cycle count reached");
   runner.stop();
   Published p;
   while (runner.take_result(&p)) {

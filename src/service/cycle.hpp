@@ -24,6 +24,7 @@ struct CycleRecord {
   int count = 0;                                // poses handed out (pickable, ranked)
   float score = 0;                              // of the pose presented
   bool budget_exhausted = false;
+  bool cut_by_shutdown = false;  // stopped by SIGTERM/SIGINT/SIGHUP, not by the budget
   std::uint64_t frame_sequence = 0;
   reg::Status status = reg::Status::ready;
   reg::Error error = reg::Error::none;

@@ -147,7 +147,8 @@ void Service::locate(Clock::time_point trigger) {
     record_.candidates = int(out.traces.size());
     for (const CandidateTrace& t : out.traces) record_.tried += t.outcome != CandidateOutcome::budget;
     record_.accepted = int(out.estimates.size());
-    record_.budget_exhausted = out.budget_exhausted;
+    record_.cut_by_shutdown = out.budget_exhausted && cancel_ && cancel_->load();
+    record_.budget_exhausted = out.budget_exhausted && !record_.cut_by_shutdown;
     if (!ranked_.empty()) {
       present(0);
     } else if (out.budget_exhausted) {

@@ -36,7 +36,10 @@ class Service {
   // integrator's picture of the frame is written, and the simulated bin loses the pipe handed out.
   void after_publish();
   // Stops a running cycle at its next check (shutdown).
-  void cancel_cycles(const std::atomic<bool>* flag) { locator_.set_cancel_flag(flag); }
+  void cancel_cycles(const std::atomic<bool>* flag) {
+    cancel_ = flag;
+    locator_.set_cancel_flag(flag);
+  }
 
   double budget_ms() const { return cfg_.service.budget_ms; }
   const CycleRecord& record() const { return record_; }
@@ -68,6 +71,7 @@ class Service {
   int index_ = -1;
   bool pick_pending_ = false;
   std::uint32_t cycles_ = 0;
+  const std::atomic<bool>* cancel_ = nullptr;
   reg::Result result_;
   CycleRecord record_;
 };

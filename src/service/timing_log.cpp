@@ -129,7 +129,7 @@ void TimingLog::write(const CycleRecord& r) {
       t.normals_ms, t.regions_ms, t.axis_ms, t.ridge_icp_ms, t.refine_ms, t.verify_ms, t.total_ms, r.cycle_ms,
       r.budget_ms, r.budget_ms > 0 ? r.cycle_ms / r.budget_ms : 0.0, r.budget_exhausted ? "true" : "false",
       r.candidates, r.tried, r.accepted, r.count, double(r.score), status_name(r.status),
-      error_name(r.error));
+      r.cut_by_shutdown ? "shutdown" : error_name(r.error));
   put(line_, n);
   if (r.command != std::uint16_t(reg::Command::locate)) return;
   window_.push_back(r.cycle_ms);

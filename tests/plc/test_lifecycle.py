@@ -2,6 +2,7 @@
 exit; systemd's notify protocol (READY, WATCHDOG, STOPPING) over a real datagram socket; SIGTERM
 during a cycle ends the process cleanly within a second; the OpenNI2 Dummy device as a source.
 usage: test_lifecycle.py PIPELOC_BINARY PORT"""
+import json
 import os
 import signal
 import socket
@@ -131,6 +132,32 @@ class Running(unittest.TestCase):
             sock.settimeout(1 * SLOWDOWN)
             while not any("STOPPING=1" in m for m in messages):
                 messages.append(sock.recv(4096).decode())
+            # The cycle cut short is logged as cut by the shutdown, not as an exhausted budget.
+            with open(os.path.join(svc.dir, "log", "timing.jsonl")) as f:
+                cycles = [json.loads(line) for line in f if '"event":"cycle"' in line]
+            self.assertEqual(cycles[-1]["error"], "shutdown", cycles[-1])
+            self.assertFalse(cycles[-1]["budget_exhausted"])
+        finally:
+            svc.stop()
+            sock.close()
+
+    def test_sighup_stops_cleanly_with_stopping(self):
+        notify_path = os.path.join(tempfile.mkdtemp(prefix="pipeloc-notify-"), "notify.sock")
+        sock = socket.socket(socket.AF_UNIX, socket.SOCK_DGRAM)
+        sock.bind(notify_path)
+        sock.settimeout(30)
+        svc = Service(BINARY, PORT, env=dict(os.environ, NOTIFY_SOCKET=notify_path))
+        try:
+            messages = []
+            while not any("READY=1" in m for m in messages):
+                messages.append(sock.recv(4096).decode())
+            svc.proc.send_signal(signal.SIGHUP)
+            code = svc.proc.wait(timeout=5 * SLOWDOWN)
+            self.assertEqual(code, 0)  # today's main: killed by the signal (-1), no STOPPING
+            sock.settimeout(1 * SLOWDOWN)
+            while not any("STOPPING=1" in m for m in messages):
+                messages.append(sock.recv(4096).decode())
+            self.assertIn("stopping: Hangup", svc.output())
         finally:
             svc.stop()
             sock.close()
