@@ -47,8 +47,8 @@ void log_result(const Published& p) {
         r.pose->xyz_mm[2], r.pose->rxyz_deg[0], r.pose->rxyz_deg[1], r.pose->rxyz_deg[2], r.score,
         p.record.command == std::uint16_t(reg::Command::locate) ? r.cycle_ms : 0);
   else
-    spdlog::info("req {}: {} (error {} {}), cycle {} ms", p.ack_id, status_name(r.status), int(r.error),
-                 error_name(r.error), r.cycle_ms);
+    spdlog::info("req {}: {} (error {} {}{}{}), cycle {} ms", p.ack_id, status_name(r.status), int(r.error),
+                 error_name(r.error), *p.record.frame_check ? ": " : "", p.record.frame_check, r.cycle_ms);
 }
 
 struct Options {

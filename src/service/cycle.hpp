@@ -20,6 +20,7 @@ struct CycleRecord {
   double cycle_ms = 0;         // trigger to result
   double budget_ms = 0;
   GrabStatus grab = GrabStatus::ok;
+  const char* frame_check = "";  // which check a frame_invalid frame failed (static text)
   int candidates = 0, tried = 0, accepted = 0;  // regions, regions worked, estimates
   int count = 0;                                // poses handed out (pickable, ranked)
   float score = 0;                              // of the pose presented
