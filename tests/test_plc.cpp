@@ -2,7 +2,9 @@
 
 #include <cmath>
 #include <random>
+#include <vector>
 
+#include "plc/modbus_request.hpp"
 #include "plc/register_map.hpp"
 
 namespace pipeloc {
@@ -155,6 +157,39 @@ TEST(RegistersDoc, WorkedExampleMatchesTheEncoder) {
   for (int i = 0; i < 11; ++i) {
     const std::uint16_t* at = &map[reg::kPose + 2 * i];
     EXPECT_EQ(std::int32_t(decode_u32(at, WordOrder::abcd)), ints[i]) << "register " << reg::kPose + 2 * i;
+  }
+}
+
+
+// MBAP framing and the request checks that keep modbus_reply() off its flushing path.
+TEST(ModbusRequest, FramedByTheMbapLengthAndCheckedAgainstTheFunctionCode) {
+  auto adu = [](std::initializer_list<int> pdu) {
+    std::vector<std::uint8_t> a = {0x12, 0x34, 0, 0, 0, std::uint8_t(pdu.size() + 1), 1};
+    for (int b : pdu) a.push_back(std::uint8_t(b));
+    return a;
+  };
+  const auto read = adu({3, 0, 10, 0, 4});
+  EXPECT_EQ(mbtcp::adu_bytes(read.data()), 12);
+  EXPECT_EQ(mbtcp::request_exception(read.data(), 12), 0);
+  std::vector<std::uint8_t> bad_protocol = read;
+  bad_protocol[3] = 1;
+  EXPECT_EQ(mbtcp::adu_bytes(bad_protocol.data()), -1);
+  const std::uint8_t too_long[7] = {0, 1, 0, 0, 0x01, 0x00, 1};  // 256 > 254
+  EXPECT_EQ(mbtcp::adu_bytes(too_long), -1);
+  const std::uint8_t too_short[7] = {0, 1, 0, 0, 0, 1, 1};  // unit id without a function code
+  EXPECT_EQ(mbtcp::adu_bytes(too_short), -1);
+  // FC16 writing CMD and REQ_ID: well-formed; a byte missing or a count that disagrees: 03.
+  const auto write = adu({16, 0, 0, 0, 2, 4, 0, 1, 0, 7});
+  EXPECT_EQ(mbtcp::request_exception(write.data(), int(write.size())), 0);
+  const auto short_write = adu({16, 0, 0, 0, 2, 4, 0, 1, 0});
+  EXPECT_EQ(mbtcp::request_exception(short_write.data(), int(short_write.size())), 3);
+  const auto bad_count = adu({16, 0, 0, 0, 2, 2, 0, 1});
+  EXPECT_EQ(mbtcp::request_exception(bad_count.data(), int(bad_count.size())), 3);
+  const auto too_many = adu({3, 0, 0, 0, 126});
+  EXPECT_EQ(mbtcp::request_exception(too_many.data(), int(too_many.size())), 3);
+  for (int fc : {0, 7, 8, 0x2B, 0x80, 0xFF}) {
+    const auto unknown = adu({fc, 0, 0, 0, 1});
+    EXPECT_EQ(mbtcp::request_exception(unknown.data(), int(unknown.size())), 1) << fc;
   }
 }
 

@@ -61,8 +61,9 @@ def mssd(vertices, pose_a, pose_b):
 class Plc:
     """A PLC as Modbus TCP client of the service, doing DESIGN.md's handshake."""
 
-    def __init__(self, port, host="127.0.0.1"):
-        self.client = ModbusTcpClient(host, port=port, timeout=3)
+    def __init__(self, port, host="127.0.0.1", source=None):
+        self.client = ModbusTcpClient(host, port=port, timeout=3,
+                                      source_address=(source, 0) if source else None)
         assert self.client.connect(), f"cannot connect to {host}:{port}"
         self.req_id = self.read()[ACK_ID]
 

@@ -1,17 +1,16 @@
 // pipeloc serve: the long-running service. Lifecycle as a ros2_control hardware interface:
 // init (config validated, every value logged), configure (model, buffers, frame source, PLC
 // port, timing log), activate (READY to systemd), cycle until SIGTERM/SIGINT, deactivate.
-#include <poll.h>
 #include <spdlog/spdlog.h>
 
 #include <atomic>
 #include <csignal>
+#include <cstring>
 #include <memory>
 
 #include "app/commands.hpp"
 #include "config/config_file.hpp"
-#include "plc/modbus_client.hpp"
-#include "plc/modbus_server.hpp"
+#include "plc/plc_link.hpp"
 #include "service/cycle_runner.hpp"
 #include "service/sd_notify.hpp"
 #include "service/service.hpp"
@@ -20,7 +19,11 @@ namespace pipeloc::app {
 namespace {
 
 std::atomic<bool> g_stop{false};
-extern "C" void on_signal(int) { g_stop = true; }
+std::atomic<int> g_signal{0};
+extern "C" void on_signal(int sig) {
+  g_signal = sig;
+  g_stop = true;
+}
 
 void install_signal_handlers() {
   struct sigaction sa {};
@@ -28,27 +31,50 @@ void install_signal_handlers() {
   sigemptyset(&sa.sa_mask);
   sigaction(SIGTERM, &sa, nullptr);
   sigaction(SIGINT, &sa, nullptr);
+  sigaction(SIGHUP, &sa, nullptr);  // a closed terminal or `systemctl kill -s HUP`: stop cleanly too
   std::signal(SIGPIPE, SIG_IGN);
 }
 
-void log_result(const Published& p, const CycleRecord& rec) {
+void log_result(const Published& p) {
   const reg::Result& r = p.result;
-  if (r.status == reg::Status::done_ok && r.pose)
+  if (p.record.cut_by_shutdown)
+    spdlog::info("req {}: cut short by shutdown after {:.0f} ms", p.ack_id, p.record.cycle_ms);
+  else if (r.status == reg::Status::done_ok && r.pose)
     spdlog::info(
         "req {}: {} pose {}/{} x {:.1f} y {:.1f} z {:.1f} mm, r {:.1f} {:.1f} {:.1f} deg, score {:.3f}, "
         "cycle {} ms",
         p.ack_id, status_name(r.status), r.index + 1, r.count, r.pose->xyz_mm[0], r.pose->xyz_mm[1],
         r.pose->xyz_mm[2], r.pose->rxyz_deg[0], r.pose->rxyz_deg[1], r.pose->rxyz_deg[2], r.score,
-        rec.command == std::uint16_t(reg::Command::locate) ? r.cycle_ms : 0);
+        p.record.command == std::uint16_t(reg::Command::locate) ? r.cycle_ms : 0);
   else
-    spdlog::info("req {}: {} (error {} {}), cycle {} ms", p.ack_id, status_name(r.status), int(r.error),
-                 error_name(r.error), r.cycle_ms);
+    spdlog::info("req {}: {} (error {} {}{}{}), cycle {} ms", p.ack_id, status_name(r.status), int(r.error),
+                 error_name(r.error), *p.record.frame_check ? ": " : "", p.record.frame_check, r.cycle_ms);
 }
 
 struct Options {
   std::string config, log_dir;
   long cycles = 0;     // stop after this many commands (0: until a signal)
   int trigger_ms = 0;  // plc.mode "none": LOCATE every this many ms
+};
+
+// HEARTBEAT every 250 ms and the systemd watchdog every WatchdogSec/3, while the cycle is healthy.
+class Pulse {
+ public:
+  void beat(PlcLink& link, bool healthy) {
+    const auto now = Clock::now();
+    if (now >= next_heartbeat_) {
+      next_heartbeat_ = now + std::chrono::milliseconds(250);
+      if (healthy) link.heartbeat();
+    }
+    if (watchdog_ms_ > 0 && now >= next_watchdog_ && healthy) {
+      next_watchdog_ = now + std::chrono::milliseconds(watchdog_ms_ / 3);
+      sd_notify_send("WATCHDOG=1");
+    }
+  }
+
+ private:
+  long watchdog_ms_ = sd_watchdog_ms();
+  Clock::time_point next_heartbeat_ = Clock::now(), next_watchdog_ = Clock::now();
 };
 
 int serve(const Options& opt) {
@@ -70,20 +96,8 @@ int serve(const Options& opt) {
   Service service(cfg, model, std::move(source));
   spdlog::info("timing log: {} (rotated at {} KiB, {} kept)", service.log().path(), cfg.log.max_file_kb,
                cfg.log.keep_files);
-  std::unique_ptr<ModbusServer> server;
-  std::unique_ptr<PlcClientLink> client;
-  if (cfg.plc.mode == "server") {
-    server = std::make_unique<ModbusServer>(cfg.plc);
-    spdlog::info("plc: Modbus TCP server on {}:{}, registers {}..{}, {} {}", cfg.plc.address, cfg.plc.port,
-                 cfg.plc.base, cfg.plc.base + reg::kSize - 1, word_order_name(cfg.plc.encoding.order),
-                 cfg.plc.encoding.scaled_int32 ? "scaled int32" : "float32");
-  } else if (cfg.plc.mode == "client") {
-    client = std::make_unique<PlcClientLink>(cfg.plc);
-    spdlog::info("plc: polling the PLC at {}:{} every {} ms, registers from {}", cfg.plc.address,
-                 cfg.plc.port, cfg.plc.poll_ms, cfg.plc.base);
-  } else {
-    spdlog::info("plc: none; LOCATE every {} ms", opt.trigger_ms);
-  }
+  std::unique_ptr<PlcLink> link = open_plc_link(cfg.plc, opt.trigger_ms);
+  spdlog::info("plc: {}", link->describe());
   install_signal_handlers();
   CycleRunner runner(service);
   {
@@ -95,70 +109,35 @@ int serve(const Options& opt) {
   // activate
   sd_notify_send("READY=1\nSTATUS=serving");
   spdlog::info("ready");
-
-  using std::chrono::milliseconds;
-  const long watchdog_ms = sd_watchdog_ms();
-  auto next_heartbeat = Clock::now(), next_watchdog = Clock::now(), next_trigger = Clock::now();
-  std::uint16_t internal_req = 0;
-  bool internal_waiting = false;
+  Pulse pulse;
   long done = 0;
-  while (!g_stop && (opt.cycles == 0 || done < opt.cycles)) {
+  while (!g_stop && !runner.failed() && (opt.cycles == 0 || done < opt.cycles)) {
     PlcRequest req;
-    bool submitted = false;
-    if (server) {
-      submitted = server->poll(20, runner.wake_fd(), &req);
-    } else {
-      pollfd pfd{runner.wake_fd(), POLLIN, 0};
-      ::poll(&pfd, 1, client ? std::min(20, cfg.plc.poll_ms) : 20);
-      if (client) {
-        submitted = client->poll(&req);
-      } else if (!internal_waiting && Clock::now() >= next_trigger) {
-        req.command = std::uint16_t(reg::Command::locate);
-        req.req_id = ++internal_req;
-        req.at = Clock::now();
-        submitted = internal_waiting = true;
-        next_trigger = req.at + milliseconds(opt.trigger_ms);
-      }
-    }
-    if (submitted) {
-      if (server) server->set_busy();
-      if (client) client->set_busy();
+    if (link->poll(20, runner.wake_fd(), &req)) {
+      link->set_busy();
       runner.submit(req);
     }
     Published p;
     while (runner.take_result(&p)) {
-      if (server) server->publish(p.result, p.ack_id);
-      if (client) client->publish(p.result, p.ack_id);
-      internal_waiting = false;
-      log_result(p, service.record());
+      link->publish(p.result, p.ack_id);
+      log_result(p);
       ++done;
     }
-    const auto now = Clock::now();
-    const bool healthy = runner.healthy(2000);
-    if (now >= next_heartbeat) {
-      next_heartbeat = now + milliseconds(250);
-      if (healthy) {
-        if (server) server->heartbeat();
-        if (client) client->heartbeat();
-      }
-    }
-    if (watchdog_ms > 0 && now >= next_watchdog && healthy) {
-      next_watchdog = now + milliseconds(watchdog_ms / 3);
-      sd_notify_send("WATCHDOG=1");
-    }
+    pulse.beat(*link, runner.healthy(2000));
   }
   // deactivate
   sd_notify_send("STOPPING=1");
-  spdlog::info("stopping: {}", g_stop ? "signal" : "cycle count reached");
+  spdlog::info("stopping: {}", g_stop ? strsignal(g_signal.load())
+                               : runner.failed() ? "the cycle thread failed" : "cycle count reached");
   runner.stop();
   Published p;
   while (runner.take_result(&p)) {
-    if (server) server->publish(p.result, p.ack_id);
-    log_result(p, service.record());
+    link->publish(p.result, p.ack_id);
+    log_result(p);
   }
   service.log().event("stop", "");
   spdlog::info("stopped after {} commands", runner.completed());
-  return 0;
+  return runner.failed() ? 1 : 0;
 }
 
 }  // namespace

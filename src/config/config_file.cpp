@@ -1,7 +1,9 @@
 #include "config/config_file.hpp"
 
+#include <arpa/inet.h>
 #include <toml++/toml.h>
 
+#include <cmath>
 #include <filesystem>
 #include <set>
 #include <sstream>
@@ -84,6 +86,26 @@ class Section {
     for (std::size_t i = 0; i < dst->size(); ++i) s << (i ? ", " : "") << (*dst)[i];
     s << "]";
     record(key, s.str(), unit);
+  }
+  // A list of strings, each checked by `valid` (which says what was expected when it is not).
+  void texts(const char* key, std::vector<std::string>* dst, bool (*valid)(const std::string&),
+             const char* expected) {
+    if (const toml::node* n = take(key)) {
+      const toml::array* a = n->as_array();
+      if (!a) fail(file_, full(key), std::string("expected an array of ") + expected);
+      dst->clear();
+      for (const toml::node& e : *a) {
+        const auto v = e.value_exact<std::string>();
+        if (!v || !valid(*v))
+          fail(file_, full(key),
+               std::string("expected an array of ") + expected +
+                   (v ? ", got \"" + *v + "\"" : std::string(", got a non-string")));
+        dst->push_back(*v);
+      }
+    }
+    std::string s = "[";
+    for (std::size_t i = 0; i < dst->size(); ++i) s += (i ? ", \"" : "\"") + (*dst)[i] + "\"";
+    record(key, s + "]", "");
   }
   void triple(const char* key, std::array<double, 3>* dst, const char* unit) {
     std::vector<double> v(dst->begin(), dst->end());
@@ -246,15 +268,45 @@ void read_source(const std::string& file, const toml::table* t, std::vector<std:
   on.finish();
 }
 
+bool is_ipv4_address(const std::string& text) {
+  in_addr a{};
+  return inet_pton(AF_INET, text.c_str(), &a) == 1;
+}
+
+// Why a 4x4 row-major matrix is not a rigid transform ("" when it is). Rows of the rotation must
+// be orthonormal to 1e-3 (a hand-eye result typed with 4 decimals passes; it is then made exactly
+// orthonormal), its determinant +1 (not a reflection), the bottom row 0 0 0 1.
+std::string rigid_transform_problem(const double* m) {
+  if (m[12] != 0 || m[13] != 0 || m[14] != 0 || m[15] != 1) return "the bottom row must be 0, 0, 0, 1";
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) {
+      const double dot = m[4 * i] * m[4 * j] + m[4 * i + 1] * m[4 * j + 1] + m[4 * i + 2] * m[4 * j + 2];
+      if (std::abs(dot - (i == j ? 1.0 : 0.0)) > 1e-3)
+        return "the rows of the 3x3 rotation are not orthonormal (row " + std::to_string(i + 1) + " . row " +
+               std::to_string(j + 1) + " = " + std::to_string(dot) + ")";
+    }
+  const double det = m[0] * (m[5] * m[10] - m[6] * m[9]) - m[1] * (m[4] * m[10] - m[6] * m[8]) +
+                     m[2] * (m[4] * m[9] - m[5] * m[8]);
+  if (det < 0) return "the 3x3 part is a reflection (determinant -1), not a rotation";
+  return "";
+}
+
 void read_plc(Section& s, PlcConfig* p) {
   s.text("mode", &p->mode, {"server", "client", "none"});
   s.text("address", &p->address, {}, false);
+  if (!is_ipv4_address(p->address))
+    fail(s.file(), s.full("address"),
+         "expected an IPv4 address such as \"127.0.0.1\" or \"0.0.0.0\" (all interfaces), got \"" + p->address +
+             "\" (host names are not resolved)");
   s.integer("port", &p->port, 1, 65535, "");
   s.integer("base", &p->base, 0, 65535 - reg::kSize, "register");
   s.integer("unit_id", &p->unit_id, 0, 255, "");
   s.integer("max_clients", &p->max_clients, 1, 64, "connections");
   s.integer("poll_ms", &p->poll_ms, 5, 10000, "ms");
   s.integer("reconnect_max_ms", &p->reconnect_max_ms, 100, 600000, "ms");
+  s.integer("request_timeout_ms", &p->request_timeout_ms, 10, 60000, "ms");
+  s.integer("idle_timeout_ms", &p->idle_timeout_ms, 100, 86400000, "ms");
+  s.texts("plc_addresses", &p->plc_addresses, is_ipv4_address, "IPv4 addresses such as \"192.168.0.10\"");
   s.integer("byte_timeout_ms", &p->byte_timeout_ms, 10, 5000, "ms");
   std::string order = word_order_name(p->encoding.order);
   s.text("word_order", &order, {"ABCD", "CDAB", "BADC", "DCBA"});
@@ -266,6 +318,10 @@ void read_plc(Section& s, PlcConfig* p) {
   s.text("euler", &euler, {"ZYX", "XYZ"});
   p->euler = parse_euler_convention(euler);
   s.numbers("robot_from_camera", &p->robot_from_camera, 16, "4x4 row-major, mm");
+  if (!p->robot_from_camera.empty()) {
+    const std::string why = rigid_transform_problem(p->robot_from_camera.data());
+    if (!why.empty()) fail(s.file(), s.full("robot_from_camera"), "expected a rigid transform (rotation and translation): " + why);
+  }
   s.finish();
 }
 

@@ -69,9 +69,14 @@ struct PlcConfig {
   int base = 0;                 // first holding register of the map
   int unit_id = 1;              // client mode: the PLC's unit identifier
   int max_clients = 8;          // server mode: connections served at once
+  int request_timeout_ms = 500;  // server mode: a request not complete this long after its
+                                 // first byte closes its connection
+  int idle_timeout_ms = 60000;   // server mode: a connection without a request this long is closed
+  std::vector<std::string> plc_addresses;  // server mode: the PLC's IPv4 addresses (never evicted
+                                           // for another client)
   int poll_ms = 50;             // client mode: how often CMD/REQ_ID are read
   int reconnect_max_ms = 5000;  // client mode: backoff cap
-  int byte_timeout_ms = 100;    // a request that stalls longer mid-frame is dropped
+  int byte_timeout_ms = 100;    // client mode: the PLC's reply may pause this long between bytes
   reg::Encoding encoding;
   EulerConvention euler = EulerConvention::zyx;
   std::vector<double> robot_from_camera;  // optional 16 values, row-major, mm: hand-eye

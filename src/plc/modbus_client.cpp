@@ -1,6 +1,7 @@
 #include "plc/modbus_client.hpp"
 
 #include <modbus/modbus.h>
+#include <poll.h>
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
@@ -95,7 +96,18 @@ bool PlcClientLink::flush() {
   return true;
 }
 
-bool PlcClientLink::poll(PlcRequest* req) {
+bool PlcClientLink::poll(int timeout_ms, int wake_fd, PlcRequest* req) {
+  pollfd pfd{wake_fd, POLLIN, 0};
+  ::poll(&pfd, 1, std::min(timeout_ms, cfg_.poll_ms));
+  return round(req);
+}
+
+std::string PlcClientLink::describe() const {
+  return "polling the PLC at " + cfg_.address + ":" + std::to_string(cfg_.port) + " every " +
+         std::to_string(cfg_.poll_ms) + " ms, registers from " + std::to_string(cfg_.base);
+}
+
+bool PlcClientLink::round(PlcRequest* req) {
   const auto now = Clock::now();
   if (!connected_ && (now < next_attempt_ || !connect())) return false;
   if (!flush()) return false;

@@ -8,23 +8,27 @@
 #include <cstdint>
 
 #include "config/config_file.hpp"
-#include "plc/modbus_server.hpp"
+#include "plc/plc_link.hpp"
+
+typedef struct _modbus modbus_t;
 
 namespace pipeloc {
 
-class PlcClientLink {
+class PlcClientLink : public PlcLink {
  public:
   explicit PlcClientLink(const PlcConfig& cfg);
-  ~PlcClientLink();
+  ~PlcClientLink() override;
   PlcClientLink(const PlcClientLink&) = delete;
   PlcClientLink& operator=(const PlcClientLink&) = delete;
 
-  // One round of the link: reconnect when due, flush owed writes, read CMD/REQ_ID when the poll
-  // period has passed. True when *req holds a newly submitted command.
-  bool poll(PlcRequest* req);
-  void set_busy();
-  void publish(const reg::Result& result, std::uint16_t ack_id);
-  void heartbeat();
+  // Waits for wake_fd up to min(timeout_ms, plc.poll_ms), then one round of the link: reconnect
+  // when due, flush owed writes, read CMD/REQ_ID when the poll period has passed. True when *req
+  // holds a newly submitted command.
+  bool poll(int timeout_ms, int wake_fd, PlcRequest* req) override;
+  void set_busy() override;
+  void publish(const reg::Result& result, std::uint16_t ack_id) override;
+  void heartbeat() override;
+  std::string describe() const override;
   bool connected() const { return connected_; }
   long reconnects() const { return reconnects_; }
 
@@ -32,6 +36,7 @@ class PlcClientLink {
   bool connect();
   void disconnect(const char* why);
   bool flush();
+  bool round(PlcRequest* req);
 
   PlcConfig cfg_;
   modbus_t* ctx_ = nullptr;

@@ -1,11 +1,12 @@
 #include "plc/modbus_server.hpp"
 
 #include <arpa/inet.h>
+#include <fcntl.h>
 #include <modbus/modbus.h>
 #include <netinet/in.h>
 #include <netinet/tcp.h>
+#include <poll.h>
 #include <spdlog/spdlog.h>
-#include <sys/select.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
@@ -16,68 +17,72 @@
 namespace pipeloc {
 namespace {
 
-// Function codes that write holding registers (Modbus Application Protocol v1.1b3, 6.6-6.17).
-constexpr int kWriteSingle = 0x06, kWriteMultiple = 0x10, kMaskWrite = 0x16, kReadWriteMultiple = 0x17;
+// Keepalive: a peer gone without a FIN (a PLC rebooted, a cable pulled) is noticed after about
+// kKeepIdleS + kKeepCount * kKeepIntervalS seconds of silence, even by a connection left idle.
+constexpr int kKeepIdleS = 10, kKeepIntervalS = 2, kKeepCount = 3;
 
-int u16(const std::uint8_t* p) { return (p[0] << 8) | p[1]; }
-
-// The registers [first, first + count) a request writes, if it writes any.
-bool written_range(const std::uint8_t* req, int header, int length, int* first, int* count) {
-  const std::uint8_t* pdu = req + header;
-  const int pdu_len = length - header;
-  if (pdu_len < 1) return false;
-  switch (pdu[0]) {
-    case kWriteSingle:
-    case kMaskWrite:
-      if (pdu_len < 3) return false;
-      *first = u16(pdu + 1), *count = 1;
-      return true;
-    case kWriteMultiple:
-      if (pdu_len < 5) return false;
-      *first = u16(pdu + 1), *count = u16(pdu + 3);
-      return true;
-    case kReadWriteMultiple:
-      if (pdu_len < 9) return false;
-      *first = u16(pdu + 5), *count = u16(pdu + 7);
-      return true;
-    default:
-      return false;
-  }
+void set_client_options(int fd) {
+  const int one = 1, idle = kKeepIdleS, interval = kKeepIntervalS, count = kKeepCount;
+  setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
+  setsockopt(fd, SOL_SOCKET, SO_KEEPALIVE, &one, sizeof one);
+  setsockopt(fd, IPPROTO_TCP, TCP_KEEPIDLE, &idle, sizeof idle);
+  setsockopt(fd, IPPROTO_TCP, TCP_KEEPINTVL, &interval, sizeof interval);
+  setsockopt(fd, IPPROTO_TCP, TCP_KEEPCNT, &count, sizeof count);
 }
 
-void set_socket_timeouts(int fd, int ms) {
-  timeval tv{ms / 1000, (ms % 1000) * 1000};
-  setsockopt(fd, SOL_SOCKET, SO_SNDTIMEO, &tv, sizeof tv);
-  const int one = 1;
-  setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
+double ms_since(Clock::time_point then, Clock::time_point now) {
+  return std::chrono::duration<double, std::milli>(now - then).count();
 }
 
 }  // namespace
 
+bool LogLimiter::allow(Clock::time_point now) {
+  if (ms_since(window_start_, now) >= kWindowS * 1000) {
+    if (left_out_ > 0)
+      spdlog::warn("plc: {} more connection messages in the last {:.0f} s not shown", left_out_, kWindowS);
+    window_start_ = now, shown_ = 0, left_out_ = 0;
+  }
+  if (shown_ < kBurst) return ++shown_, true;
+  ++left_out_;
+  return false;
+}
+
 ModbusServer::ModbusServer(const PlcConfig& cfg) : cfg_(cfg), port_(cfg.port) {
   const std::string where = cfg.address + ":" + std::to_string(cfg.port);
+  sockaddr_in addr{};
+  addr.sin_family = AF_INET;
+  addr.sin_port = htons(std::uint16_t(cfg.port));
+  if (inet_pton(AF_INET, cfg.address.c_str(), &addr.sin_addr) != 1)
+    throw PlcError("plc.address '" + cfg.address + "': expected an IPv4 address such as 0.0.0.0");
+  // The context only builds replies: modbus_reply() on each framed request, through the socket
+  // of the connection it came from (modbus_set_socket).
   ctx_ = modbus_new_tcp(cfg.address.c_str(), cfg.port);
   if (!ctx_) throw PlcError("plc.address '" + where + "': " + modbus_strerror(errno));
-  set_server_timeouts(ctx_, cfg.byte_timeout_ms);
   // Only the map's holding registers exist: reads and writes elsewhere get exception 02.
   mapping_ = modbus_mapping_new_start_address(0, 0, 0, 0, std::uint16_t(cfg.base), reg::kSize, 0, 0);
   if (!mapping_) {
     modbus_free(ctx_);
     throw PlcError(std::string("plc: register map: ") + modbus_strerror(errno));
   }
-  listen_fd_ = modbus_tcp_listen(ctx_, cfg.max_clients);
-  if (listen_fd_ < 0) {
-    const std::string why = modbus_strerror(errno);
+  listen_fd_ = ::socket(AF_INET, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
+  const int one = 1;
+  if (listen_fd_ >= 0) setsockopt(listen_fd_, SOL_SOCKET, SO_REUSEADDR, &one, sizeof one);
+  if (listen_fd_ < 0 || ::bind(listen_fd_, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0 ||
+      ::listen(listen_fd_, kListenBacklog) != 0) {
+    const std::string why = std::strerror(errno);
+    if (listen_fd_ >= 0) ::close(listen_fd_);
     modbus_mapping_free(mapping_);
     modbus_free(ctx_);
     throw PlcError("plc: cannot listen on " + where + ": " + why);
   }
-  clients_.reserve(std::size_t(cfg.max_clients));
+  socklen_t len = sizeof addr;
+  if (getsockname(listen_fd_, reinterpret_cast<sockaddr*>(&addr), &len) == 0) port_ = ntohs(addr.sin_port);
+  conns_.reserve(std::size_t(cfg.max_clients));
   reg::write_initial(cfg_.encoding, map());
 }
 
 ModbusServer::~ModbusServer() {
-  for (int fd : clients_) ::close(fd);
+  for (const Connection& c : conns_) ::close(c.fd);
   if (listen_fd_ >= 0) ::close(listen_fd_);
   modbus_mapping_free(mapping_);
   modbus_free(ctx_);
@@ -91,80 +96,149 @@ void ModbusServer::publish(const reg::Result& r, std::uint16_t ack_id) {
   reg::write_result(r, ack_id, cfg_.encoding, map());
 }
 void ModbusServer::heartbeat() { ++map()[reg::kHeartbeat]; }
-
-void ModbusServer::accept_client() {
-  sockaddr_in addr{};
-  socklen_t len = sizeof addr;
-  const int fd = ::accept(listen_fd_, reinterpret_cast<sockaddr*>(&addr), &len);
-  if (fd < 0) return;
-  char ip[INET_ADDRSTRLEN] = "?";
-  inet_ntop(AF_INET, &addr.sin_addr, ip, sizeof ip);
-  if (int(clients_.size()) >= cfg_.max_clients) {
-    ++counters_.refused;
-    spdlog::warn("plc: refused a connection from {}: {} clients already (plc.max_clients)", ip,
-                 clients_.size());
-    ::close(fd);
-    return;
-  }
-  set_socket_timeouts(fd, cfg_.byte_timeout_ms);
-  clients_.push_back(fd);
-  spdlog::info("plc: client {} connected ({} now)", ip, clients_.size());
+std::string ModbusServer::describe() const {
+  return "Modbus TCP server on " + cfg_.address + ":" + std::to_string(port_) + ", registers " +
+         std::to_string(cfg_.base) + ".." + std::to_string(cfg_.base + reg::kSize - 1) + ", " +
+         word_order_name(cfg_.encoding.order) + (cfg_.encoding.scaled_int32 ? " scaled int32" : " float32") +
+         ", up to " + std::to_string(cfg_.max_clients) + " clients" +
+         (cfg_.plc_addresses.empty() ? "" : ", the PLC at " + cfg_.plc_addresses.front() +
+                                                (cfg_.plc_addresses.size() > 1 ? " and others" : ""));
 }
 
-void ModbusServer::drop_client(std::size_t i) {
-  ::close(clients_[i]);
-  clients_.erase(clients_.begin() + long(i));
+// Makes room for one more connection when every slot is taken: the connection quiet the longest
+// goes, never one from the PLC's addresses for anyone else. False: no room (all slots are the PLC's).
+bool ModbusServer::admit(bool plc, Clock::time_point now) {
+  if (int(conns_.size()) < cfg_.max_clients) return true;
+  // Connections their peers closed since this round's poll go first, without evicting anyone.
+  serve_ready(0, now);
+  if (int(conns_.size()) < cfg_.max_clients) return true;
+  // A connection that never sent a request (a scanner, a client left idle) goes before one that
+  // did; among equals, the one quiet the longest.
+  auto quietest = [&](bool from_plc) {
+    long best = -1;
+    auto before = [](const Connection& a, const Connection& b) {
+      return a.requests != b.requests && (a.requests == 0 || b.requests == 0) ? a.requests == 0
+                                                                                : a.last_request < b.last_request;
+    };
+    for (std::size_t i = 0; i < conns_.size(); ++i)
+      if (conns_[i].plc == from_plc && (best < 0 || before(conns_[i], conns_[std::size_t(best)])))
+        best = long(i);
+    return best;
+  };
+  long victim = quietest(false);
+  if (victim < 0 && plc) victim = quietest(true);
+  if (victim < 0) return false;
+  ++counters_.evicted;
+  drop(std::size_t(victim), "closed to make room (plc.max_clients)", now);
+  return true;
 }
 
-void ModbusServer::serve_client(std::size_t i) {
-  std::uint8_t query[MODBUS_TCP_MAX_ADU_LENGTH];
-  modbus_set_socket(ctx_, clients_[i]);
-  const int rc = modbus_receive(ctx_, query);
-  if (rc == 0) return;  // not for this unit: ignored
-  if (rc < 0) {         // closed, garbage or stalled mid-request: this connection only
-    if (errno != ECONNRESET) {
-      ++counters_.dropped;
-      spdlog::warn("plc: dropped a client: {}", modbus_strerror(errno));
+void ModbusServer::accept_clients(Clock::time_point now) {
+  for (;;) {  // until EAGAIN: a burst of connects never waits in the backlog for the next round
+    sockaddr_in addr{};
+    socklen_t len = sizeof addr;
+    const int fd = ::accept4(listen_fd_, reinterpret_cast<sockaddr*>(&addr), &len, SOCK_NONBLOCK | SOCK_CLOEXEC);
+    if (fd < 0) {
+      if (errno == EINTR || errno == ECONNABORTED) continue;
+      if (errno != EAGAIN && errno != EWOULDBLOCK && log_limit_.allow(now))
+        spdlog::warn("plc: accept: {}", std::strerror(errno));  // e.g. out of file descriptors
+      return;
     }
-    drop_client(i);
-    return;
+    Connection c;
+    c.fd = fd;
+    inet_ntop(AF_INET, &addr.sin_addr, c.ip, sizeof c.ip);
+    for (const std::string& a : cfg_.plc_addresses) c.plc = c.plc || a == c.ip;
+    if (!admit(c.plc, now)) {
+      ++counters_.refused;
+      if (log_limit_.allow(now))
+        spdlog::warn("plc: refused {}: all {} connections are the PLC's (plc.max_clients)", c.ip, conns_.size());
+      ::close(fd);
+      continue;
+    }
+    set_client_options(fd);
+    c.last_request = now;
+    ++counters_.accepted;
+    conns_.push_back(c);
+    if (log_limit_.allow(now))
+      spdlog::info("plc: client {}{} connected ({} now)", c.ip, c.plc ? " (PLC)" : "", conns_.size());
   }
-  ++counters_.requests;
-  if (reply_to_request(ctx_, mapping_, cfg_.base, query, rc) < 0) drop_client(i);
 }
 
-void set_server_timeouts(modbus_t* ctx, int byte_timeout_ms) {
-  const auto timeout_us = std::uint32_t(byte_timeout_ms) * 1000u;
-  modbus_set_byte_timeout(ctx, timeout_us / 1000000u, timeout_us % 1000000u);
-  modbus_set_indication_timeout(ctx, timeout_us / 1000000u, timeout_us % 1000000u);
-  modbus_set_response_timeout(ctx, 0, 1000);
+void ModbusServer::drop(std::size_t i, const char* why, Clock::time_point now) {
+  if (why) {
+    ++counters_.dropped;
+    if (log_limit_.allow(now)) spdlog::warn("plc: client {}: {}", conns_[i].ip, why);
+  }
+  ::close(conns_[i].fd);
+  conns_.erase(conns_.begin() + long(i));
 }
 
-int reply_to_request(modbus_t* ctx, modbus_mapping_t* mapping, int base, const std::uint8_t* query,
-                     int length) {
-  const int header = modbus_get_header_length(ctx);
-  int first = 0, count = 0;
-  if (written_range(query, header, length, &first, &count) &&
-      (first < base || first + count > base + reg::kReqId + 1))
-    // Only CMD and REQ_ID belong to the PLC; the rest is the service's.
-    return modbus_reply_exception(ctx, query, MODBUS_EXCEPTION_ILLEGAL_DATA_ADDRESS);
-  return modbus_reply(ctx, query, length, mapping);
+void ModbusServer::serve_client(std::size_t i, Clock::time_point now) {
+  Connection& c = conns_[i];
+  for (int served = 0; served < kRequestsPerRound;) {
+    int need = mbtcp::kHeaderBytes;
+    if (c.have >= mbtcp::kHeaderBytes && (need = mbtcp::adu_bytes(c.buf)) < 0)
+      return drop(i, "not Modbus TCP (MBAP header), closed", now);
+    if (c.have < need) {
+      const ssize_t n = ::recv(c.fd, c.buf + c.have, std::size_t(need - c.have), MSG_DONTWAIT);
+      if (n > 0) {
+        if (c.have == 0) c.request_started = now;
+        c.have += int(n);
+        continue;
+      }
+      if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR)) return;
+      return drop(i, n == 0 || errno == ECONNRESET ? nullptr : "receive failed, closed", now);
+    }
+    ++counters_.requests;
+    modbus_set_socket(ctx_, c.fd);
+    if (mbtcp::request_exception(c.buf, c.have)) ++counters_.exceptions;
+    // A client that does not read its replies fills its socket buffer: the send fails at once
+    // (non-blocking) and only that connection goes.
+    if (reply_to_request(ctx_, mapping_, cfg_.base, c.buf, c.have) < 0)
+      return drop(i, "reply not accepted (the client does not read), closed", now);
+    c.have = 0;
+    c.last_request = now;
+    ++c.requests;
+    ++served;
+  }
+}
+
+void ModbusServer::close_expired(Clock::time_point now) {
+  for (std::size_t i = conns_.size(); i-- > 0;) {
+    const Connection& c = conns_[i];
+    if (c.have > 0 && ms_since(c.request_started, now) > cfg_.request_timeout_ms) {
+      drop(i, "request incomplete after plc.request_timeout_ms, closed", now);
+    } else if (c.have == 0 && ms_since(c.last_request, now) > cfg_.idle_timeout_ms) {
+      ++counters_.idle_closed;
+      drop(i, "no request for plc.idle_timeout_ms, closed", now);
+    }
+  }
+}
+
+int ModbusServer::serve_ready(int timeout_ms, Clock::time_point now) {
+  pollfd fds[64];
+  for (std::size_t i = 0; i < conns_.size(); ++i) fds[i] = {conns_[i].fd, POLLIN, 0};
+  const int ready = ::poll(fds, nfds_t(conns_.size()), timeout_ms);
+  // From the back, so that dropping a connection leaves the indices still to visit valid.
+  for (std::size_t i = conns_.size(); ready > 0 && i-- > 0;)
+    if (fds[i].revents) serve_client(i, now);
+  return ready;
 }
 
 bool ModbusServer::poll(int timeout_ms, int wake_fd, PlcRequest* req) {
-  fd_set fds;
-  FD_ZERO(&fds);
-  FD_SET(listen_fd_, &fds);
-  int max_fd = listen_fd_;
-  for (int fd : clients_) FD_SET(fd, &fds), max_fd = std::max(max_fd, fd);
-  if (wake_fd >= 0) FD_SET(wake_fd, &fds), max_fd = std::max(max_fd, wake_fd);
-  timeval tv{timeout_ms / 1000, (timeout_ms % 1000) * 1000};
-  const int n = ::select(max_fd + 1, &fds, nullptr, nullptr, &tv);
-  if (n <= 0) return false;
-  // From the back, so that dropping a client leaves the indices still to visit valid.
-  for (std::size_t i = clients_.size(); i-- > 0;)
-    if (FD_ISSET(clients_[i], &fds)) serve_client(i);
-  if (FD_ISSET(listen_fd_, &fds)) accept_client();
+  pollfd fds[2 + 64];
+  int n = 0;
+  fds[n++] = {listen_fd_, POLLIN, 0};
+  fds[n++] = {wake_fd, POLLIN, 0};  // a negative fd is ignored by poll()
+  for (const Connection& c : conns_) fds[n++] = {c.fd, POLLIN, 0};
+  const int ready = ::poll(fds, nfds_t(n), timeout_ms);  // EINTR (a signal): straight on
+  const Clock::time_point now = Clock::now();
+  if (ready > 0) {
+    for (std::size_t i = conns_.size(); i-- > 0;)
+      if (fds[2 + i].revents) serve_client(i, now);
+  }
+  close_expired(now);
+  if (ready > 0 && fds[0].revents) accept_clients(now);
   // Each change of REQ_ID submits CMD once; two changes within one round run the later.
   const std::uint16_t req_id = map()[reg::kReqId];
   if (req_id == last_req_id_) return false;

@@ -1,69 +1,82 @@
-// Server mode (the default): the PLC is the Modbus TCP client. One thread owns the libmodbus
-// context and the register map; a select() loop serves up to plc.max_clients connections at
-// once. A client that stalls mid-request (plc.byte_timeout_ms), sends garbage or disconnects
-// loses its own connection and costs the others nothing.
+// Server mode (the default): the PLC is the Modbus TCP client. One thread owns the register map
+// and every socket, all non-blocking, so nothing a client does (dribbling a request byte by
+// byte, stopping half-way, sending garbage, never reading its replies, opening connection after
+// connection) delays another client, the heartbeat, the watchdog or shutdown:
+// - each request is framed by its MBAP length in the connection's own buffer and answered once
+//   complete; one not complete plc.request_timeout_ms after its first byte closes its connection;
+// - the listen socket is drained each round (backlog kListenBacklog, not max_clients);
+// - a connection without a request for plc.idle_timeout_ms is closed; TCP keepalive finds peers
+//   that vanished (a PLC rebooted);
+// - slots: when plc.max_clients are taken, a new connection closes one that never sent a request,
+//   else the one quiet the longest;
+//   connections from plc.plc_addresses are only closed to make room for another from the PLC.
+// libmodbus stays the protocol layer: modbus_reply() on each framed, checked request.
 #pragma once
 
 #include <cstdint>
-#include <stdexcept>
 #include <vector>
 
-#include "config/config_file.hpp"
-#include "core/clock.hpp"
-#include "plc/register_map.hpp"
-
-typedef struct _modbus modbus_t;
-typedef struct _modbus_mapping_t modbus_mapping_t;
+#include "plc/modbus_request.hpp"
+#include "plc/plc_link.hpp"
 
 namespace pipeloc {
 
-struct PlcError : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
-
-// A command the PLC submitted: REQ_ID changed.
-struct PlcRequest {
-  std::uint16_t command = 0, req_id = 0;
-  Clock::time_point at{};
-};
-
-// What the server does with one received request: an exception for writes outside CMD/REQ_ID,
-// else libmodbus's reply from the map (which answers reads outside it with exception 02).
-// Returns modbus_reply's result (-1: the connection failed). Used by the server and the fuzzer.
-int reply_to_request(modbus_t* ctx, modbus_mapping_t* mapping, int base, const std::uint8_t* query,
-                     int length);
-// Timeouts of a server context: a stalled request costs at most byte_timeout_ms, and libmodbus's
-// flush before some exception replies (an unknown function code) sleeps 1 ms instead of its
-// default 0.5 s response timeout, which would stall every client.
-void set_server_timeouts(modbus_t* ctx, int byte_timeout_ms);
-
-class ModbusServer {
+// Connection messages: at most kBurst lines per kWindowS, then one line saying how many were left out.
+class LogLimiter {
  public:
+  static constexpr int kBurst = 10;
+  static constexpr double kWindowS = 10;
+  bool allow(Clock::time_point now);
+
+ private:
+  Clock::time_point window_start_{};
+  int shown_ = 0;
+  long left_out_ = 0;
+};
+
+class ModbusServer : public PlcLink {
+ public:
+  static constexpr int kListenBacklog = 256;
+  static constexpr int kRequestsPerRound = 16;  // per connection, so pipelining cannot starve others
+
   explicit ModbusServer(const PlcConfig& cfg);  // binds and listens; throws PlcError naming address:port
-  ~ModbusServer();
+  ~ModbusServer() override;
   ModbusServer(const ModbusServer&) = delete;
   ModbusServer& operator=(const ModbusServer&) = delete;
 
   // Serves requests until one submits a command (returned in *req), `wake_fd` becomes readable,
   // or timeout_ms pass. Returns true when *req holds a new command.
-  bool poll(int timeout_ms, int wake_fd, PlcRequest* req);
+  bool poll(int timeout_ms, int wake_fd, PlcRequest* req) override;
 
-  void set_busy();
-  void publish(const reg::Result& result, std::uint16_t ack_id);
-  void heartbeat();
-  int clients() const { return int(clients_.size()); }
+  void set_busy() override;
+  void publish(const reg::Result& result, std::uint16_t ack_id) override;
+  void heartbeat() override;
+  std::string describe() const override;
+  int clients() const { return int(conns_.size()); }
   int port() const { return port_; }
   const std::uint16_t* registers() const;
 
   struct Counters {
-    long requests = 0, exceptions = 0, dropped = 0, refused = 0;
+    long accepted = 0, requests = 0, exceptions = 0, dropped = 0, refused = 0, evicted = 0, idle_closed = 0;
   };
   const Counters& counters() const { return counters_; }
 
  private:
-  void accept_client();
-  void serve_client(std::size_t i);
-  void drop_client(std::size_t i);
+  struct Connection {
+    int fd = -1;
+    bool plc = false;  // from one of plc.plc_addresses
+    int have = 0;      // bytes of the current request in buf
+    long requests = 0;  // answered on this connection
+    Clock::time_point last_request{}, request_started{};
+    char ip[16] = {};
+    std::uint8_t buf[mbtcp::kMaxAduBytes] = {};
+  };
+  void accept_clients(Clock::time_point now);
+  bool admit(bool plc, Clock::time_point now);
+  void serve_client(std::size_t i, Clock::time_point now);
+  int serve_ready(int timeout_ms, Clock::time_point now);
+  void close_expired(Clock::time_point now);
+  void drop(std::size_t i, const char* why, Clock::time_point now);
   std::uint16_t* map();
 
   PlcConfig cfg_;
@@ -71,9 +84,10 @@ class ModbusServer {
   modbus_mapping_t* mapping_ = nullptr;
   int listen_fd_ = -1;
   int port_ = 0;
-  std::vector<int> clients_;
+  std::vector<Connection> conns_;
   std::uint16_t last_req_id_ = 0;
   Counters counters_;
+  LogLimiter log_limit_;
 };
 
 }  // namespace pipeloc

@@ -13,16 +13,19 @@ struct CycleRecord {
   std::uint64_t cycle = 0;  // LOCATE cycles so far (this one included)
   std::uint16_t command = 0, req_id = 0;
   double trigger_unix_ms = 0;  // wall clock at the trigger
+  double queued_ms = 0;        // trigger to the start of the cycle (waiting behind another command)
   double grab_ms = 0;          // trigger to frame in hand
   double frame_age_ms = 0;     // frame capture to result
   StageTimes stages;           // of the localizer
   double cycle_ms = 0;         // trigger to result
   double budget_ms = 0;
   GrabStatus grab = GrabStatus::ok;
+  const char* frame_check = "";  // which check a frame_invalid frame failed (static text)
   int candidates = 0, tried = 0, accepted = 0;  // regions, regions worked, estimates
   int count = 0;                                // poses handed out (pickable, ranked)
   float score = 0;                              // of the pose presented
   bool budget_exhausted = false;
+  bool cut_by_shutdown = false;  // stopped by SIGTERM/SIGINT/SIGHUP, not by the budget
   std::uint64_t frame_sequence = 0;
   reg::Status status = reg::Status::ready;
   reg::Error error = reg::Error::none;

@@ -1,14 +1,18 @@
 #include "service/cycle_runner.hpp"
 
+#include <spdlog/spdlog.h>
 #include <sys/eventfd.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <cstdint>
+#include <system_error>
 
 namespace pipeloc {
 
 CycleRunner::CycleRunner(Service& service) : service_(service) {
   wake_fd_ = eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC);
+  if (wake_fd_ < 0) throw std::system_error(errno, std::generic_category(), "cycle runner: eventfd");
   service_.cancel_cycles(&cancel_);
   thread_ = std::thread([this] { loop(); });
 }
@@ -48,6 +52,7 @@ bool CycleRunner::take_result(Published* out) {
 }
 
 bool CycleRunner::healthy(double slack_ms) const {
+  if (failed_) return false;
   const long since = busy_since_ns_.load();
   if (since == 0) return true;
   const double busy_ms = double(Clock::now().time_since_epoch().count() - since) / 1e6;
@@ -64,21 +69,34 @@ void CycleRunner::loop() {
       req = pending_;
       has_pending_ = false;
     }
-    busy_since_ns_ = long(Clock::now().time_since_epoch().count());
-    const reg::Result& r = service_.run(req.command, req.req_id, req.at);
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      result_.result = r;
-      result_.ack_id = req.req_id;
-      has_result_ = true;
+    try {
+      run_one(req);
+    } catch (const std::exception& e) {
+      // The cycle reports by status codes; an exception here is a bug or the heap gone. The
+      // thread stops, healthy() turns false, the heartbeat and the watchdog stop, systemd restarts.
+      spdlog::critical("cycle thread stopped: req {}: {}", req.req_id, e.what());
+      failed_ = true;
+      return;
     }
-    const std::uint64_t one = 1;
-    [[maybe_unused]] const auto w = ::write(wake_fd_, &one, sizeof one);
-    service_.log().write(service_.record());
-    if (!cancel_) service_.after_publish();  // shutting down: the simulated bin can stay as it is
-    busy_since_ns_ = 0;
-    ++completed_;
   }
+}
+
+void CycleRunner::run_one(const PlcRequest& req) {
+  busy_since_ns_ = long(Clock::now().time_since_epoch().count());
+  const reg::Result& r = service_.run(req.command, req.req_id, req.at);
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    result_.result = r;
+    result_.ack_id = req.req_id;
+    result_.record = service_.record();
+    has_result_ = true;
+  }
+  const std::uint64_t one = 1;
+  [[maybe_unused]] const auto w = ::write(wake_fd_, &one, sizeof one);
+  service_.log().write(service_.record());
+  if (!cancel_) service_.after_publish();  // shutting down: the simulated bin can stay as it is
+  busy_since_ns_ = 0;
+  ++completed_;
 }
 
 }  // namespace pipeloc

@@ -27,17 +27,23 @@ std::unique_ptr<FrameSource> open_frame_source(const AppConfig& cfg, const PipeM
   throw SourceError("source.kind '" + cfg.source.kind + "': expected sim, replay or openni2");
 }
 
-GrabStatus check_frame(const Image<float>& depth, const Intrinsics& expected, double min_valid_share) {
+GrabStatus check_frame(const Image<float>& depth, const Intrinsics& expected, double min_valid_share,
+                       const char** why) {
+  const char* unused;
+  if (!why) why = &unused;
+  *why = "";
   if (depth.width != expected.width || depth.height != expected.height ||
       depth.pixels.size() != std::size_t(expected.width) * std::size_t(expected.height))
-    return GrabStatus::frame_invalid;
+    return *why = "size differs from the intrinsics", GrabStatus::frame_invalid;
   std::size_t valid = 0;
   for (const float z : depth.pixels) {
-    if (!std::isfinite(z) || z < 0) return GrabStatus::frame_invalid;
+    if (!std::isfinite(z)) return *why = "a depth is NaN or infinite", GrabStatus::frame_invalid;
+    if (z < 0) return *why = "a depth is negative", GrabStatus::frame_invalid;
     valid += z > 0;
   }
-  return double(valid) >= min_valid_share * double(depth.pixels.size()) ? GrabStatus::ok
-                                                                        : GrabStatus::frame_invalid;
+  if (double(valid) >= min_valid_share * double(depth.pixels.size())) return GrabStatus::ok;
+  *why = "too few pixels with depth";
+  return GrabStatus::frame_invalid;
 }
 
 }  // namespace pipeloc

@@ -49,8 +49,9 @@ class FrameSource {
 std::unique_ptr<FrameSource> open_frame_source(const AppConfig& cfg, const PipeModel& model);
 
 // A frame the localizer can work on: the right size, finite non-negative depths, and at least
-// min_valid_share of its pixels with a reading.
+// min_valid_share of its pixels with a reading. *why (when given) says which check failed, for
+// the timing log (ERROR 2 alone does not tell a maintainer what was wrong).
 GrabStatus check_frame(const Image<float>& depth_mm, const Intrinsics& expected,
-                       double min_valid_share = 0.02);
+                       double min_valid_share = 0.02, const char** why = nullptr);
 
 }  // namespace pipeloc

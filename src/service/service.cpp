@@ -87,12 +87,10 @@ const reg::Result& Service::run(std::uint16_t command, std::uint16_t req_id, Clo
       }
       break;
     case std::uint16_t(reg::Command::clear_error):
+      // Only the error goes: the poses of the last LOCATE stay, and NEXT presents the next one
+      // (a PLC clears a fault of its own, e.g. a failed grip, and goes on with the same frame).
       result_.status = reg::Status::ready;
       result_.error = reg::Error::none;
-      index_ = -1;
-      ranked_.clear();
-      result_.count = 0;
-      result_.index = 0;
       break;
     default:
       result_.status = reg::Status::error;
@@ -114,12 +112,18 @@ void Service::locate(Clock::time_point trigger) {
   ++cycles_;
   ranked_.clear();
   index_ = -1;
-  const Clock::time_point deadline = trigger + ms_duration(cfg_.service.budget_ms);
+  // The budget counts from when the cycle starts: a LOCATE queued behind another command (REQ_ID
+  // changed while BUSY) gets all of it. The frame is still one taken after the PLC's trigger.
+  const Clock::time_point started = Clock::now();
+  record_.queued_ms = ms_between(trigger, started);
+  const Clock::time_point deadline = started + ms_duration(cfg_.service.budget_ms);
 
   GrabStatus grab = source_->grab(trigger, deadline, &frame_);
+  record_.frame_check = grab == GrabStatus::frame_invalid ? "rejected by the source" : "";
   // A frame from before the trigger is never localized: it could show a pipe already picked.
-  if (grab == GrabStatus::ok && frame_.captured <= trigger) grab = GrabStatus::frame_invalid;
-  if (grab == GrabStatus::ok) grab = check_frame(frame_.depth_mm, source_->intrinsics());
+  if (grab == GrabStatus::ok && frame_.captured <= trigger)
+    grab = GrabStatus::frame_invalid, record_.frame_check = "taken before the trigger";
+  if (grab == GrabStatus::ok) grab = check_frame(frame_.depth_mm, source_->intrinsics(), 0.02, &record_.frame_check);
   const Clock::time_point grabbed = Clock::now();
   record_.grab = grab;
   record_.grab_ms = ms_between(trigger, grabbed);
@@ -145,7 +149,8 @@ void Service::locate(Clock::time_point trigger) {
     record_.candidates = int(out.traces.size());
     for (const CandidateTrace& t : out.traces) record_.tried += t.outcome != CandidateOutcome::budget;
     record_.accepted = int(out.estimates.size());
-    record_.budget_exhausted = out.budget_exhausted;
+    record_.cut_by_shutdown = out.budget_exhausted && cancel_ && cancel_->load();
+    record_.budget_exhausted = out.budget_exhausted && !record_.cut_by_shutdown;
     if (!ranked_.empty()) {
       present(0);
     } else if (out.budget_exhausted) {

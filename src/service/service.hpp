@@ -29,13 +29,17 @@ class Service {
 
   // Runs the PLC command `command` (CMD register) submitted at `trigger`:
   // LOCATE captures a frame taken after the trigger and localizes within service.budget_ms;
-  // NEXT presents the next pose of the last LOCATE; CLEAR_ERROR returns to READY.
+  // NEXT presents the next pose of the last LOCATE; CLEAR_ERROR returns to READY, keeping the
+  // poses of the last LOCATE for NEXT.
   const reg::Result& run(std::uint16_t command, std::uint16_t req_id, Clock::time_point trigger);
   // After the result is published (outside the cycle): every log.overlay_every LOCATEs the
   // integrator's picture of the frame is written, and the simulated bin loses the pipe handed out.
   void after_publish();
   // Stops a running cycle at its next check (shutdown).
-  void cancel_cycles(const std::atomic<bool>* flag) { locator_.set_cancel_flag(flag); }
+  void cancel_cycles(const std::atomic<bool>* flag) {
+    cancel_ = flag;
+    locator_.set_cancel_flag(flag);
+  }
 
   double budget_ms() const { return cfg_.service.budget_ms; }
   const CycleRecord& record() const { return record_; }
@@ -67,6 +71,7 @@ class Service {
   int index_ = -1;
   bool pick_pending_ = false;
   std::uint32_t cycles_ = 0;
+  const std::atomic<bool>* cancel_ = nullptr;
   reg::Result result_;
   CycleRecord record_;
 };

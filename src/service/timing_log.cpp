@@ -1,5 +1,8 @@
 #include "service/timing_log.hpp"
 
+#include <spdlog/spdlog.h>
+#include <sys/stat.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cstring>
@@ -71,12 +74,39 @@ TimingLog::~TimingLog() {
   if (file_) std::fclose(file_);
 }
 
+// The file is gone (its folder deleted, the file removed or rotated away by hand) or was never
+// reopened: open it again, creating the folder. Only on that path does anything allocate.
+bool TimingLog::reopen_if_gone() {
+  struct stat st {};
+  if (file_ && ::fstat(fileno(file_), &st) == 0 && st.st_nlink > 0) return true;
+  if (file_) std::fclose(file_);
+  std::error_code ec;
+  std::filesystem::create_directories(cfg_.dir, ec);
+  file_ = std::fopen(path_.c_str(), "a");
+  if (!file_) return false;
+  bytes_ = std::ftell(file_);
+  ++reopened_;
+  spdlog::warn("timing log: {} had gone (folder deleted?); reopened", path_);
+  return true;
+}
+
 void TimingLog::put(const char* line, int length) {
   if (length <= 0) return;
   length = std::min(length, int(sizeof(line_)) - 1);
-  if (!file_) return;  // a failed rotation: the log is lost, the cycle is not
-  std::fwrite(line, 1, std::size_t(length), file_);
-  std::fflush(file_);
+  if (!reopen_if_gone()) {  // the log is lost for now, the cycle is not; said once per outage
+    if (!failing_) spdlog::error("timing log: cannot open {}: {}", path_, std::strerror(errno));
+    failing_ = true, ++write_errors_;
+    return;
+  }
+  const bool ok = std::fwrite(line, 1, std::size_t(length), file_) == std::size_t(length) && std::fflush(file_) == 0;
+  if (!ok) {
+    if (!failing_) spdlog::error("timing log: cannot write {}: {} (disk full?)", path_, std::strerror(errno));
+    failing_ = true, ++write_errors_;
+    std::clearerr(file_);
+    return;
+  }
+  if (failing_) spdlog::info("timing log: writing {} again after {} lost lines", path_, write_errors_);
+  failing_ = false;
   bytes_ += length;
   if (bytes_ > long(cfg_.max_file_kb) * 1024) rotate();
 }
@@ -119,17 +149,17 @@ void TimingLog::write(const CycleRecord& r) {
   const int n = std::snprintf(
       line_, sizeof line_,
       "{\"event\":\"cycle\",\"cycle\":%llu,\"cmd\":%u,\"req_id\":%u,\"trigger_unix_ms\":%.1f,\"frame\":%llu,"
-      "\"grab\":\"%s\",\"grab_ms\":%.2f,\"frame_age_ms\":%.2f,\"zbuffer_ms\":%.2f,\"normals_ms\":%.2f,"
+      "\"queued_ms\":%.2f,\"grab\":\"%s\",\"frame_check\":\"%s\",\"grab_ms\":%.2f,\"frame_age_ms\":%.2f,\"zbuffer_ms\":%.2f,\"normals_ms\":%.2f,"
       "\"regions_ms\":%.2f,\"axis_ms\":%.2f,\"ridge_icp_ms\":%.2f,\"refine_ms\":%.2f,\"verify_ms\":%.2f,"
       "\"locate_ms\":%.2f,\"cycle_ms\":%.2f,\"budget_ms\":%.1f,\"budget_use\":%.3f,\"budget_exhausted\":%s,"
       "\"candidates\":%d,\"tried\":%d,\"accepted\":%d,\"count\":%d,\"score\":%.4f,\"status\":\"%s\","
       "\"error\":\"%s\"}\n",
       (unsigned long long)r.cycle, unsigned(r.command), unsigned(r.req_id), r.trigger_unix_ms,
-      (unsigned long long)r.frame_sequence, grab_status_name(r.grab), r.grab_ms, r.frame_age_ms, t.zbuffer_ms,
+      (unsigned long long)r.frame_sequence, r.queued_ms, grab_status_name(r.grab), r.frame_check, r.grab_ms, r.frame_age_ms, t.zbuffer_ms,
       t.normals_ms, t.regions_ms, t.axis_ms, t.ridge_icp_ms, t.refine_ms, t.verify_ms, t.total_ms, r.cycle_ms,
       r.budget_ms, r.budget_ms > 0 ? r.cycle_ms / r.budget_ms : 0.0, r.budget_exhausted ? "true" : "false",
       r.candidates, r.tried, r.accepted, r.count, double(r.score), status_name(r.status),
-      error_name(r.error));
+      r.cut_by_shutdown ? "shutdown" : error_name(r.error));
   put(line_, n);
   if (r.command != std::uint16_t(reg::Command::locate)) return;
   window_.push_back(r.cycle_ms);

@@ -25,6 +25,9 @@ class TimingLog {
   // Writes a line of the form {"event": ..., ...rest}; rest is a JSON fragment without braces.
   void event(const char* name, const char* rest_json);
   const std::string& path() const { return path_; }
+  // Lines lost to a full disk or an unwritable folder; times the file was found gone and reopened.
+  long write_errors() const { return write_errors_; }
+  long reopened() const { return reopened_; }
 
   struct Summary {
     int cycles = 0;
@@ -35,12 +38,15 @@ class TimingLog {
  private:
   void put(const char* line, int length);
   void rotate();
+  bool reopen_if_gone();
 
   LogConfig cfg_;
   int summary_every_;
   std::string path_;
   std::FILE* file_ = nullptr;
   long bytes_ = 0;
+  long write_errors_ = 0, reopened_ = 0;
+  bool failing_ = false;
   std::vector<double> window_;  // cycle_ms since the last summary (capacity summary_every)
   mutable std::vector<double> sorted_;
   char line_[2048];

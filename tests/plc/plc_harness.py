@@ -16,7 +16,8 @@ from pipeloc_plc import *  # noqa: E402,F401,F403
 class Service:
     """`pipeloc serve` in a temporary folder with the given TOML sections added."""
 
-    def __init__(self, binary, port, extra_toml="", pipes=12, seed=3, budget_ms=2000, mode="server", env=None):
+    def __init__(self, binary, port, extra_toml="", pipes=12, seed=3, budget_ms=2000, mode="server", env=None,
+                 plc_toml=""):
         self.binary = binary
         self.port = port
         self.dir = tempfile.mkdtemp(prefix="pipeloc-plc-test-")
@@ -40,6 +41,7 @@ budget_ms = {budget_ms}
 mode = "{mode}"
 address = "127.0.0.1"
 port = {port}
+{plc_toml}
 [log]
 dir = "{os.path.join(self.dir, 'log')}"
 {extra_toml}

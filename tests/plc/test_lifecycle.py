@@ -2,6 +2,7 @@
 exit; systemd's notify protocol (READY, WATCHDOG, STOPPING) over a real datagram socket; SIGTERM
 during a cycle ends the process cleanly within a second; the OpenNI2 Dummy device as a source.
 usage: test_lifecycle.py PIPELOC_BINARY PORT"""
+import json
 import os
 import signal
 import socket
@@ -42,11 +43,18 @@ class StartUp(unittest.TestCase):
              "no-such-device"),
             ("[model]\npreset = \"sbend\"\n[locate]\nthreads = 0\n", "locate.threads"),
             ("[model]\npreset = \"sbend\"\nmodel = 3\n", "model.model"),
+            ("[model]\npreset = \"sbend\"\n[plc]\naddress = \"localhost\"\n", "plc.address"),
+            ("[model]\npreset = \"sbend\"\n[plc]\naddress = \"999.1.1.1\"\n", "plc.address"),
+            ("[model]\npreset = \"sbend\"\n[plc]\nrobot_from_camera = [2,0,0,0, 0,2,0,0, 0,0,2,0, 0,0,0,1]\n",
+             "plc.robot_from_camera"),
         ]
         for text, named in cases:
             code, out, path = serve_with(text)
             self.assertNotEqual(code, 0, text)
             self.assertIn(named, out, text)
+            if named.startswith("plc."):
+                self.assertEqual(code, 2, text)  # a config error: exit 2, never "ready"
+                self.assertNotIn("ready", out, text)
             self.assertNotIn("Segmentation", out)
         with socket.socket() as taken:  # a port somebody else holds
             taken.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)  # TIME_WAIT of an earlier run
@@ -124,6 +132,32 @@ class Running(unittest.TestCase):
             sock.settimeout(1 * SLOWDOWN)
             while not any("STOPPING=1" in m for m in messages):
                 messages.append(sock.recv(4096).decode())
+            # The cycle cut short is logged as cut by the shutdown, not as an exhausted budget.
+            with open(os.path.join(svc.dir, "log", "timing.jsonl")) as f:
+                cycles = [json.loads(line) for line in f if '"event":"cycle"' in line]
+            self.assertEqual(cycles[-1]["error"], "shutdown", cycles[-1])
+            self.assertFalse(cycles[-1]["budget_exhausted"])
+        finally:
+            svc.stop()
+            sock.close()
+
+    def test_sighup_stops_cleanly_with_stopping(self):
+        notify_path = os.path.join(tempfile.mkdtemp(prefix="pipeloc-notify-"), "notify.sock")
+        sock = socket.socket(socket.AF_UNIX, socket.SOCK_DGRAM)
+        sock.bind(notify_path)
+        sock.settimeout(30)
+        svc = Service(BINARY, PORT, env=dict(os.environ, NOTIFY_SOCKET=notify_path))
+        try:
+            messages = []
+            while not any("READY=1" in m for m in messages):
+                messages.append(sock.recv(4096).decode())
+            svc.proc.send_signal(signal.SIGHUP)
+            code = svc.proc.wait(timeout=5 * SLOWDOWN)
+            self.assertEqual(code, 0)  # today's main: killed by the signal (-1), no STOPPING
+            sock.settimeout(1 * SLOWDOWN)
+            while not any("STOPPING=1" in m for m in messages):
+                messages.append(sock.recv(4096).decode())
+            self.assertIn("stopping: Hangup", svc.output())
         finally:
             svc.stop()
             sock.close()
