@@ -133,12 +133,14 @@ Mesh make_pipe(const PipeSpec& spec) {
     const Eigen::AngleAxisd twist(seg.twist_deg * kDegToRad, f.t);
     f.n = twist * f.n;
     f.b = twist * f.b;
-    const Eigen::Vector3d centre = f.p + seg.radius_mm * f.n;
-    const Eigen::Vector3d axis = f.t.cross(f.n);  // turning t towards n
+    // A negative angle turns towards -n: the centre of the arc lies on that side.
+    const double side = seg.angle_deg < 0 ? -1.0 : 1.0;
+    const Eigen::Vector3d centre = f.p + side * seg.radius_mm * f.n;
+    const Eigen::Vector3d axis = side * f.t.cross(f.n);  // turning t towards side * n
     const int steps = std::max(1, int(std::ceil(std::abs(seg.angle_deg) / spec.bend_step_deg)));
     const Frame start = f;
     for (int s = 1; s <= steps; ++s) {
-      const Eigen::AngleAxisd rot(seg.angle_deg * kDegToRad * s / steps, axis);
+      const Eigen::AngleAxisd rot(std::abs(seg.angle_deg) * kDegToRad * s / steps, axis);
       f.p = centre + rot * (start.p - centre);
       f.t = rot * start.t;
       f.n = rot * start.n;
