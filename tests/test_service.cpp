@@ -7,6 +7,7 @@
 
 #include "io/png.hpp"
 #include "model/make_pipe.hpp"
+#include "model/stl.hpp"
 #include "score/mssd.hpp"
 #include "service/openni2_source.hpp"
 #include "service/replay_source.hpp"
@@ -85,8 +86,9 @@ TEST(ServiceConfig, EveryKeyWrongInTurnIsNamed) {
 
 TEST(ServiceConfig, DefaultsAreListedAndPathsResolveBesideTheFile) {
   test::TempDir dir;
-  const AppConfig cfg = config_from(dir, "[model]\nstl = \"pipe.stl\"\n[source]\nkind = \"replay\"\n"
-                                         "[source.replay]\npath = \"frames\"\n[plc]\nword_order = \"CDAB\"\n");
+  const AppConfig cfg = config_from(dir,
+                                    "[model]\nstl = \"pipe.stl\"\n[source]\nkind = \"replay\"\n"
+                                    "[source.replay]\npath = \"frames\"\n[plc]\nword_order = \"CDAB\"\n");
   EXPECT_EQ(cfg.model.stl, dir.file("pipe.stl"));
   EXPECT_EQ(cfg.source.replay.path, dir.file("frames"));
   EXPECT_EQ(cfg.plc.encoding.order, WordOrder::cdab);
@@ -150,7 +152,8 @@ TEST(ReplaySource, BadFilesStopItAtStartUpNamingTheFile) {
   cfg.path = dir.path();  // a folder of PNGs needs a camera file
   test::write_text(dir.file("a.png"), "not a png");
   EXPECT_THROW(ReplaySource{cfg}, SourceError);
-  test::write_text(dir.file("cam.json"), R"({"0": {"cam_K": [570,0,4, 0,570,2, 0,0,1], "depth_scale": 1.0}})");
+  test::write_text(dir.file("cam.json"),
+                   R"({"0": {"cam_K": [570,0,4, 0,570,2, 0,0,1], "depth_scale": 1.0}})");
   cfg.camera = dir.file("cam.json");
   try {
     ReplaySource src(cfg);
@@ -188,6 +191,28 @@ TEST(SimSource, FramesAreFreshAndAPickedPipeLeavesTheBin) {
   for (int i = 0; i < 4; ++i) src.picked(src.pipes_in_camera()[0]);
   EXPECT_EQ(src.bins_filled(), 2);  // emptied, then refilled
   EXPECT_EQ(src.pipes_in_camera().size(), 5u);
+}
+
+// A straight tube picked with another turn about its axis is the same pick (the scorer's view).
+TEST(SimSource, AStraightTubePickedAtAnyTurnAboutItsAxisLeavesTheBin) {
+  PipeSpec spec;
+  spec.diameter_mm = 22;
+  spec.segments = parse_centreline("S83");
+  // Through an STL file, as serve loads it: welded vertices in the file's order.
+  test::TempDir dir;
+  write_stl(dir.file("tube.stl"), make_pipe(spec), StlFormat::binary);
+  const PipeModel tube = load_pipe_model(dir.file("tube.stl"));
+  SimSourceConfig cfg;
+  cfg.pipes = 3;
+  cfg.refill = false;
+  SimSource src(tube, cfg);
+  const std::vector<Pose> pipes = src.pipes_in_camera();
+  ASSERT_EQ(pipes.size(), 3u);
+  // The tube runs along model x (make-pipe sweeps the first run along x), centred at x = L/2.
+  Pose turn = Pose::Identity();
+  turn.linear() = Eigen::AngleAxisd(50 * M_PI / 180, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  src.picked(pipes[1] * turn);
+  EXPECT_EQ(src.pipes_in_camera().size(), 2u);
 }
 
 TEST(OpenNi2Source, DummyDeviceOpensAndDeliversFrames) {
@@ -302,8 +327,8 @@ TEST(Service, AFailingSourceGivesErrorsThenCyclesResume) {
   using F = FaultySource;
   Service service(cfg, sbend(),
                   std::make_unique<F>(sbend(), cfg.source.sim,
-                                      std::vector<F::Fault>{F::unavailable, F::wrong_size, F::all_zero, F::nan,
-                                                            F::negative, F::unavailable}));
+                                      std::vector<F::Fault>{F::unavailable, F::wrong_size, F::all_zero,
+                                                            F::nan, F::negative, F::unavailable}));
   const reg::Error expected[] = {reg::Error::sensor_unavailable, reg::Error::frame_invalid,
                                  reg::Error::frame_invalid,      reg::Error::frame_invalid,
                                  reg::Error::frame_invalid,      reg::Error::sensor_unavailable};
@@ -317,7 +342,8 @@ TEST(Service, AFailingSourceGivesErrorsThenCyclesResume) {
     EXPECT_EQ(service.run(2, std::uint16_t(100 + i), Clock::now()).error, reg::Error::no_further_result);
   }
   int ok = 0;
-  for (int i = 0; i < 3; ++i) ok += service.run(1, std::uint16_t(10 + i), Clock::now()).status == reg::Status::done_ok;
+  for (int i = 0; i < 3; ++i)
+    ok += service.run(1, std::uint16_t(10 + i), Clock::now()).status == reg::Status::done_ok;
   EXPECT_GT(ok, 0);  // the source is back: cycles resume
 }
 
@@ -341,9 +367,11 @@ TEST(Service, BudgetCutsASlowConfigurationShort) {
   service.run(1, 1, Clock::now());
   const CycleRecord full = service.record();
   ASSERT_GT(full.candidates, 2);
-  const double fixed_ms = full.grab_ms + full.stages.zbuffer_ms + full.stages.normals_ms + full.stages.regions_ms;
+  const double fixed_ms =
+      full.grab_ms + full.stages.zbuffer_ms + full.stages.normals_ms + full.stages.regions_ms;
   cfg.service.budget_ms = 2 * fixed_ms + 100;
-  ASSERT_GT(full.cycle_ms, 3 * cfg.service.budget_ms) << "the configuration is not slow enough to test a budget";
+  ASSERT_GT(full.cycle_ms, 3 * cfg.service.budget_ms)
+      << "the configuration is not slow enough to test a budget";
   for (int i = 0; i < 3; ++i) {
     service.run(1, std::uint16_t(2 + i), Clock::now());
     const CycleRecord& r = service.record();
@@ -372,9 +400,9 @@ TEST(Service, TimingLogHasALinePerCycleAndSummaries) {
     const nlohmann::json j = nlohmann::json::parse(line);
     if (j["event"] == "cycle") {
       ++cycles;
-      for (const char* key : {"trigger_unix_ms", "frame_age_ms", "grab_ms", "zbuffer_ms", "normals_ms",
-                              "regions_ms", "ridge_icp_ms", "cycle_ms", "candidates", "tried", "status", "score",
-                              "budget_use"})
+      for (const char* key :
+           {"trigger_unix_ms", "frame_age_ms", "grab_ms", "zbuffer_ms", "normals_ms", "regions_ms",
+            "ridge_icp_ms", "cycle_ms", "candidates", "tried", "status", "score", "budget_use"})
         EXPECT_TRUE(j.contains(key)) << key;
       if (j["cmd"] == 1) {
         EXPECT_GT(j["frame_age_ms"].get<double>(), 0.0);

@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <stdexcept>
 
 #include "model/make_pipe.hpp"
 #include "model/neighbors.hpp"
@@ -34,11 +35,10 @@ TEST(Simulator, SameSeedSameScene) {
 }
 
 // The noisy image agrees with the noise-free render at the true poses within the noise model:
-// on valid pixels of smooth surfaces, within 5 sigma plus one disparity step.
-TEST(Simulator, NoisyDepthAgreesWithTruthWithinNoiseModel) {
+// on valid pixels of smooth surfaces, within 5 sigma plus one disparity step; for both sensors.
+void expect_depth_within_noise_model(const SceneParams& params) {
   const PipeModel model = coarse_model("sbend");
   std::mt19937 rng(3);
-  const SceneParams params = small_params(15);
   const SimulatedScene s = simulate_scene(model, params, rng);
   const auto& clean = s.clean.z_mm;
   int checked = 0, outside = 0, valid = 0, rendered = 0;
@@ -54,9 +54,10 @@ TEST(Simulator, NoisyDepthAgreesWithTruthWithinNoiseModel) {
           lo = std::min(lo, clean.at(x + dx, y + dy)), hi = std::max(hi, clean.at(x + dx, y + dy));
       if (lo <= 0 || hi - lo > 3) continue;  // edges: lateral noise may pick the neighbour
       ++checked;
-      const double bound =
-          5 * params.sensor.axial_sigma_mm(clean.at(x, y)) * 2 +  // grazing doubles sigma at most here
-          params.sensor.depth_step_mm(clean.at(x, y), params.intrinsics.fx) + (hi - lo);
+      const double bound = 5 * params.sensor.axial_sigma_mm(clean.at(x, y), params.intrinsics.fx) *
+                               2 +  // grazing doubles it at most
+                           params.sensor.depth_step_mm(clean.at(x, y), params.intrinsics.fx) +
+                           (hi - lo);
       outside += std::abs(z - clean.at(x, y)) > bound;
     }
   }
@@ -65,6 +66,56 @@ TEST(Simulator, NoisyDepthAgreesWithTruthWithinNoiseModel) {
   // The sensor loses some pixels (shadows, grazing, glints, dropouts) but not most.
   EXPECT_LT(valid, rendered);
   EXPECT_GT(valid, rendered * 8 / 10);
+}
+
+TEST(Simulator, NoisyDepthAgreesWithTruthWithinNoiseModel) {
+  expect_depth_within_noise_model(small_params(15));
+}
+
+TEST(Simulator, StereoDepthAgreesWithTruthWithinItsNoiseModelFromClose) {
+  SceneParams params = small_params(15);
+  params.sensor = sensor_model("stereo");
+  params.camera_height_min_mm = 450, params.camera_height_max_mm = 550;
+  expect_depth_within_noise_model(params);
+}
+
+TEST(Simulator, StereoNoiseIsDisparityNoiseOverFocalLengthAndBaseline) {
+  const SensorModel stereo = sensor_model("stereo");
+  // sigma_z = z^2 0.08 px / (f b), b = 50 mm; depth steps of 1/32 px.
+  EXPECT_NEAR(stereo.axial_sigma_mm(1000, 570), 1e6 * 0.08 / (570 * 50), 1e-9);
+  EXPECT_NEAR(stereo.depth_step_mm(1000, 570), 1e6 / 32 / (570 * 50), 1e-9);
+  EXPECT_EQ(stereo.min_range_mm, 300);
+  EXPECT_THROW(sensor_model("tof"), std::invalid_argument);
+  // The Kinect-class model is the default one.
+  EXPECT_EQ(sensor_model("kinect").axial_sigma_mm(1000, 570), SensorModel{}.axial_sigma_mm(1000, 570));
+}
+
+// Pixels at a depth edge reading no depth near them: the stereo matcher's blend of fore- and
+// background (lateral noise only moves a reading to a neighbour's depth).
+int flying_pixels(const SceneParams& params) {
+  const PipeModel model = coarse_model("sbend");
+  std::mt19937 rng(5);
+  const SimulatedScene s = simulate_scene(model, params, rng);
+  const auto& clean = s.clean.z_mm;
+  int flying = 0;
+  for (int y = 2; y < clean.height - 2; ++y)
+    for (int x = 2; x < clean.width - 2; ++x) {
+      const float z = s.depth_mm.at(x, y);
+      if (z <= 0) continue;
+      float nearest = 1e9f;
+      for (int dy = -2; dy <= 2; ++dy)
+        for (int dx = -2; dx <= 2; ++dx) nearest = std::min(nearest, std::abs(clean.at(x + dx, y + dy) - z));
+      flying += nearest > 10;
+    }
+  return flying;
+}
+
+TEST(Simulator, StereoSensorHasFlyingPixelsAtDepthEdges) {
+  SceneParams kinect = small_params(15), stereo = small_params(15);
+  stereo.sensor = sensor_model("stereo");
+  const int k = flying_pixels(kinect), s = flying_pixels(stereo);
+  EXPECT_GT(s, 300);
+  EXPECT_GT(s, 5 * k) << "kinect " << k << ", stereo " << s;
 }
 
 // Möller–Trumbore, for the brute-force recount.
@@ -168,6 +219,30 @@ TEST(Simulator, PipesDoNotInterpenetrateAndLieAtVariedTilts) {
     tilted += std::acos(std::clamp(std::abs(up_in_model.dot(first_up)), 0.0, 1.0)) > 5 * M_PI / 180;
   }
   EXPECT_GE(tilted, 2);
+}
+
+TEST(Simulator, BinGrowsWithThePipeSoThatAPileOf50Fits) {
+  // The paper's pipes in 20s keep today's bin (the simulated data stays as it was).
+  for (const char* preset : {"sbend", "u", "torus"}) {
+    PileParams pile;
+    const BinSpec bin = bin_for_pile(coarse_model(preset), pile);
+    EXPECT_EQ(bin.inner_x_mm, pile.bin.inner_x_mm) << preset;
+    EXPECT_EQ(bin.inner_y_mm, pile.bin.inner_y_mm) << preset;
+  }
+  // A long U of a 30 mm tube: 50 of them fill a larger bin.
+  PipeSpec spec;
+  spec.diameter_mm = 30;
+  spec.sides = 12;
+  spec.bend_step_deg = 15;
+  spec.segments = parse_centreline("S300,B180r60,S200");
+  const PipeModel model = derive_pipe_model(make_pipe(spec), "long-u");
+  PileParams pile;
+  pile.pipes = 50;
+  pile.bin = bin_for_pile(model, pile);
+  EXPECT_GT(pile.bin.inner_y_mm, 2 * model.extent_mm);
+  EXPECT_NEAR(pile.bin.inner_x_mm / pile.bin.inner_y_mm, 640.0 / 480.0, 0.01);
+  std::mt19937 rng(7);
+  EXPECT_EQ(int(build_pile(model, pile, rng).size()), 50);
 }
 
 }  // namespace

@@ -105,11 +105,12 @@ void add_locate(CLI::App& app) {
       }
     }
     spdlog::info(
-        "{} pipes found ({} candidate regions, {} cores ({} split off touching pipes), {} of them in a larger "
+        "{} pipes found ({} candidate regions, {} cores ({} split off touching pipes), {} of them in a "
+        "larger "
         "one's region, {} grown mostly into earlier regions) in {:.1f} ms; pick: {}",
         out.estimates.size(), out.regions.candidates, out.regions.cores_kept, out.regions.split_cores,
-        out.regions.claimed, out.regions.overlapping,
-        out.times.total_ms, pick >= 0 ? "rank " + std::to_string(pick) : std::string("none"));
+        out.regions.claimed, out.regions.overlapping, out.times.total_ms,
+        pick >= 0 ? "rank " + std::to_string(pick) : std::string("none"));
     const StageTimes& st = out.times;
     spdlog::info(
         "stages ms: zbuffer {:.1f} normals {:.1f} regions {:.1f} axis {:.1f} ridge_icp {:.1f} refine {:.1f} "
@@ -132,7 +133,7 @@ void add_locate(CLI::App& app) {
 
 void add_eval_bop(CLI::App& app) {
   struct Options {
-    std::string dataset, out, config, match = "zridge", overlays;
+    std::string dataset, out, config, match = "zridge", overlays, picks;
   };
   auto opt = std::make_shared<Options>();
   auto* cmd = app.add_subcommand("eval-bop", "Run every target of a BOP dataset and write BOP results CSV");
@@ -142,6 +143,9 @@ void add_eval_bop(CLI::App& app) {
   cmd->add_option("--match", opt->match, "zridge (the paper) or surface (whole visible surface)")
       ->check(CLI::IsMember({"zridge", "surface"}));
   cmd->add_option("--overlays", opt->overlays, "also write an overlay PNG per image into this directory");
+  cmd->add_option("--picks", opt->picks,
+                  "also write the pose the service would hand out per image (the first pickable; no row = "
+                  "DONE_NONE), BOP results CSV");
   cmd->callback([opt] {
     LocateConfig cfg = config_or_default(opt->config).locate;
     cfg.match_surface = opt->match == "surface";
@@ -152,7 +156,13 @@ void add_eval_bop(CLI::App& app) {
     std::ofstream csv(opt->out);
     if (!csv) throw IoError("cannot write '" + opt->out + "'");
     write_results_header(csv);
-    int images = 0, rows = 0;
+    std::ofstream picks_csv;
+    if (!opt->picks.empty()) {
+      picks_csv.open(opt->picks);
+      if (!picks_csv) throw IoError("cannot write '" + opt->picks + "'");
+      write_results_header(picks_csv);
+    }
+    int images = 0, rows = 0, picked = 0;
     double total_ms = 0;
     for (const auto& t : targets) {
       const TargetFrame frame = read_target_frame(opt->dataset, t, &cameras);
@@ -169,6 +179,12 @@ void add_eval_bop(CLI::App& app) {
             csv, {t.scene_id, t.im_id, t.obj_id, e.score, e.model_to_cam, out.times.total_ms / 1000.0});
         ++rows;
       }
+      if (const int pick = out.pick(); pick >= 0 && picks_csv.is_open()) {
+        const PipeEstimate& e = out.estimates[std::size_t(pick)];
+        write_result_row(
+            picks_csv, {t.scene_id, t.im_id, t.obj_id, e.score, e.model_to_cam, out.times.total_ms / 1000.0});
+        ++picked;
+      }
       ++images;
       total_ms += out.times.total_ms;
       if (!opt->overlays.empty()) {
@@ -181,6 +197,8 @@ void add_eval_bop(CLI::App& app) {
     }
     spdlog::info("{} images, {} result rows, mean {:.1f} ms per image -> {}", images, rows,
                  images ? total_ms / images : 0.0, opt->out);
+    if (picks_csv.is_open())
+      spdlog::info("{} of {} images hand out a pick -> {}", picked, images, opt->picks);
   });
 }
 

@@ -9,7 +9,7 @@ namespace pipeloc::app {
 
 void add_score(CLI::App& app) {
   struct Options {
-    std::string dataset, results, json;
+    std::string dataset, results, json, picks;
   };
   auto opt = std::make_shared<Options>();
   auto* cmd =
@@ -17,9 +17,15 @@ void add_score(CLI::App& app) {
   cmd->add_option("--dataset", opt->dataset, "BOP dataset directory")->required();
   cmd->add_option("--results", opt->results, "results CSV")->required();
   cmd->add_option("--json", opt->json, "also write the figures as JSON here");
+  cmd->add_option("--picks", opt->picks,
+                  "the pose handed out per image (eval-bop --picks): also score pick rate, pick-correct, "
+                  "wrong picks");
   cmd->callback([opt] {
     const ResultsFile results = read_results_csv(opt->results);
-    const ScoreReport report = score_results(opt->dataset, results);
+    ResultsFile picks;
+    if (!opt->picks.empty()) picks = read_results_csv(opt->picks);
+    const ScoreReport report =
+        score_results(opt->dataset, results, {}, opt->picks.empty() ? nullptr : &picks);
     std::cout << format_report(report);
     if (!opt->json.empty()) write_json(opt->json, report_to_json(report));
   });

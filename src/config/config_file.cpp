@@ -208,9 +208,14 @@ void read_source(const std::string& file, const toml::table* t, std::vector<std:
   sim.integer("pipes", &c->sim.pipes, 1, 200, "pipes");
   sim.integer("seed", &c->sim.seed, 0, 1 << 30, "");
   sim.real("tilt_deg", &c->sim.tilt_deg, 0, 45, "deg");
+  sim.real("camera_height_min_mm", &c->sim.camera_height_min_mm, 200, 3000, "mm");
+  sim.real("camera_height_max_mm", &c->sim.camera_height_max_mm, 200, 3000, "mm");
+  sim.text("sensor", &c->sim.sensor, {"kinect", "stereo"});
   sim.boolean("refill", &c->sim.refill);
   sim.text("truth_file", &c->sim.truth_file);
   sim.finish();
+  if (c->sim.camera_height_min_mm > c->sim.camera_height_max_mm)
+    fail(file, "source.sim.camera_height_max_mm", "expected at least camera_height_min_mm");
 
   Section rp(file, "source.replay", sub("replay"), eff);
   rp.text("path", &c->replay.path);

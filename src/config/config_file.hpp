@@ -27,9 +27,11 @@ struct ModelConfig {
 struct SimSourceConfig {
   int pipes = 20;
   int seed = 1;
-  double tilt_deg = 0;     // camera tilt from vertical, drawn in [0, this] per bin
-  bool refill = true;      // a new bin when the last pipe has been picked
-  std::string truth_file;  // if set: one JSON line per frame with every pipe's true pose (tests, demo)
+  double tilt_deg = 0;  // camera tilt from vertical, drawn in [0, this] per bin
+  double camera_height_min_mm = 980, camera_height_max_mm = 1080;  // above the bin floor, drawn per bin
+  std::string sensor = "kinect";  // kinect (structured light) | stereo (active stereo, RealSense D4xx)
+  bool refill = true;             // a new bin when the last pipe has been picked
+  std::string truth_file;         // if set: one JSON line per frame with every pipe's true pose (tests, demo)
 };
 
 struct ReplaySourceConfig {

@@ -1,5 +1,7 @@
 #include "score/mssd.hpp"
 
+#include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -32,6 +34,33 @@ double mssd(const std::vector<Eigen::Vector3d>& vertices, const Pose& est, const
   consider(truth);
   for (const auto& s : symmetries) consider(truth * s);
   return best;
+}
+
+std::vector<Pose> with_tube_turns(const std::vector<Eigen::Vector3d>& vertices,
+                                  const std::vector<Pose>& symmetries, int steps) {
+  if (vertices.size() < 8) return symmetries;
+  Eigen::Vector3d c = Eigen::Vector3d::Zero();
+  for (const auto& v : vertices) c += v;
+  c /= double(vertices.size());
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (const auto& v : vertices) cov += (v - c) * (v - c).transpose();
+  const Eigen::Vector3d axis = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(cov).eigenvectors().col(2);
+  std::vector<double> radius;
+  for (const auto& v : vertices) radius.push_back(((v - c) - (v - c).dot(axis) * axis).norm());
+  std::vector<double> sorted = radius;
+  std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
+  const double median = sorted[sorted.size() / 2];
+  if (median <= 0 || *std::max_element(radius.begin(), radius.end()) > 1.03 * median) return symmetries;
+
+  std::vector<Pose> out = symmetries;
+  for (int k = 1; k < steps; ++k) {
+    Pose turn = Pose::Identity();
+    turn.linear() = Eigen::AngleAxisd(2 * M_PI * k / steps, axis).toRotationMatrix();
+    turn.translation() = c - turn.linear() * c;
+    out.push_back(turn);
+    for (const auto& s : symmetries) out.push_back(turn * s);
+  }
+  return out;
 }
 
 }  // namespace pipeloc

@@ -56,6 +56,8 @@ double ScoreCounts::best_correct(int bound) const {
 double ScoreCounts::precision_10() const { return ratio(matched_10, estimates); }
 double ScoreCounts::time_median_s() const { return percentile(times_s, 0.5); }
 double ScoreCounts::time_p95_s() const { return percentile(times_s, 0.95); }
+double ScoreCounts::pick_rate() const { return ratio(picked_images, pick_images); }
+double ScoreCounts::pick_correct_5mm() const { return ratio(pick_correct_5, picks); }
 
 void ScoreCounts::add(const ScoreCounts& o) {
   images += o.images;
@@ -67,10 +69,24 @@ void ScoreCounts::add(const ScoreCounts& o) {
   estimates += o.estimates;
   matched_10 += o.matched_10;
   times_s.insert(times_s.end(), o.times_s.begin(), o.times_s.end());
+  pick_images += o.pick_images;
+  picked_images += o.picked_images;
+  picks += o.picks;
+  pick_correct_5 += o.pick_correct_5;
+  wrong_picks += o.wrong_picks;
 }
 
-ScoreReport score_results(const std::string& dataset, const ResultsFile& results, const ScoreParams& params) {
+ScoreReport score_results(const std::string& dataset, const ResultsFile& results, const ScoreParams& params,
+                          const ResultsFile* picks) {
   ScoreReport report;
+  std::map<std::tuple<int, int, int>, const ResultRow*> pick_of;
+  if (picks) {
+    report.has_picks = true;
+    report.pick_rows_malformed = picks->malformed;
+    for (const auto& r : picks->rows)
+      if (!pick_of.emplace(std::tuple{r.scene_id, r.im_id, r.obj_id}, &r).second) ++report.pick_rows_extra;
+  }
+  int pick_rows_used = 0;
   report.malformed_rows = results.malformed;
   report.malformed_examples = results.first_errors;
   const auto targets = read_targets(dataset + "/test_targets_bop19.json");
@@ -94,6 +110,7 @@ ScoreReport score_results(const std::string& dataset, const ResultsFile& results
         o.symmetries = info->second.symmetries;
         report.object_names[t.obj_id] = info->second.name;
       }
+      o.symmetries = with_tube_turns(o.vertices, o.symmetries);
     }
     if (!scene_gt.count(t.scene_id)) {
       scene_gt[t.scene_id] = read_scene_gt(scene_dir(dataset, t.scene_id) + "/scene_gt.json");
@@ -147,26 +164,56 @@ ScoreReport score_results(const std::string& dataset, const ResultsFile& results
         c.matched_10 = matched;
       }
     }
+    if (picks) {
+      const auto it = pick_of.find({t.scene_id, t.im_id, t.obj_id});
+      const ResultRow* pick = it == pick_of.end() ? nullptr : it->second;
+      c.pick_images = c.top_pipes > 0;
+      c.picked_images = c.top_pipes > 0 && pick;
+      if (pick) {
+        ++pick_rows_used;
+        c.picks = 1;
+        // The PLC's pose against every pipe the gripper could take: covered at most the bound.
+        double best = std::numeric_limits<double>::infinity();
+        for (std::size_t g = 0; g < gt.size(); ++g)
+          if (info[g]->occ_by_pipes <= params.top_occlusion_max)
+            best = std::min(best, mssd(obj.vertices, pick->model_to_cam, gt[g]->model_to_cam, obj.symmetries,
+                                       params.wrong_pick_mm));
+        c.pick_correct_5 = best < kBoundsMm[0];
+        c.wrong_picks = best > params.wrong_pick_mm;
+      }
+    }
     report.per_object[t.obj_id].add(c);
     report.overall.add(c);
   }
   report.rows_outside_targets = int(results.rows.size()) - rows_used;
+  if (picks) report.pick_rows_outside_targets = int(pick_of.size()) - pick_rows_used;
   return report;
 }
 
 std::string format_report(const ScoreReport& r) {
   std::ostringstream out;
   char line[256];
-  std::snprintf(line, sizeof line, "%-18s %6s %5s %9s %10s %7s %8s %8s %5s %10s %10s\n", "object", "images",
+  std::snprintf(line, sizeof line, "%-18s %6s %5s %9s %10s %7s %8s %8s %5s %10s %10s", "object", "images",
                 "top", "recall@5", "recall@10", "best@5", "best@10", "prec@10", "est", "t_med_ms",
                 "t_p95_ms");
   out << line;
+  if (r.has_picks) {
+    std::snprintf(line, sizeof line, " %9s %7s %11s %6s", "pick_rate", "picks", "pick_ok@5", "wrong");
+    out << line;
+  }
+  out << '\n';
   auto row = [&](const std::string& name, const ScoreCounts& c) {
-    std::snprintf(line, sizeof line, "%-18s %6d %5d %9.3f %10.3f %7.3f %8.3f %8.3f %5d %10.1f %10.1f\n",
+    std::snprintf(line, sizeof line, "%-18s %6d %5d %9.3f %10.3f %7.3f %8.3f %8.3f %5d %10.1f %10.1f",
                   name.c_str(), c.images, c.top_pipes, c.top_recall(5), c.top_recall(10), c.best_correct(5),
                   c.best_correct(10), c.precision_10(), c.estimates, c.time_median_s() * 1e3,
                   c.time_p95_s() * 1e3);
     out << line;
+    if (r.has_picks) {
+      std::snprintf(line, sizeof line, " %9.3f %7d %11.3f %6d", c.pick_rate(), c.picks, c.pick_correct_5mm(),
+                    c.wrong_picks);
+      out << line;
+    }
+    out << '\n';
   };
   for (const auto& [id, c] : r.per_object) {
     const auto name = r.object_names.count(id) ? r.object_names.at(id) : "";
@@ -176,26 +223,46 @@ std::string format_report(const ScoreReport& r) {
   out << "malformed rows: " << r.malformed_rows
       << ", rows for images not in the targets: " << r.rows_outside_targets << '\n';
   for (const auto& e : r.malformed_examples) out << "  " << e << '\n';
+  if (r.has_picks)
+    out << "picks: images with a top pipe given a pose / such images (pick_rate); handed-out poses within 5 "
+           "mm "
+           "of a pipe covered at most 15 % / handed-out poses (pick_ok@5); wrong: more than 10 mm from every "
+           "such pipe. pick rows malformed: "
+        << r.pick_rows_malformed << ", for images not in the targets: " << r.pick_rows_outside_targets
+        << ", more than one for an image: " << r.pick_rows_extra << '\n';
   return out.str();
 }
 
 Json report_to_json(const ScoreReport& r) {
-  auto counts = [](const ScoreCounts& c) {
+  auto counts = [&r](const ScoreCounts& c) {
     auto num = [](double v) { return std::isnan(v) ? Json(nullptr) : Json(v); };
-    return Json{{"images", c.images},
-                {"top_pipes", c.top_pipes},
-                {"top_recall_5mm", num(c.top_recall(5))},
-                {"top_recall_10mm", num(c.top_recall(10))},
-                {"best_correct_5mm", num(c.best_correct(5))},
-                {"best_correct_10mm", num(c.best_correct(10))},
-                {"precision_10mm", num(c.precision_10())},
-                {"estimates", c.estimates},
-                {"time_median_s", num(c.time_median_s())},
-                {"time_p95_s", num(c.time_p95_s())}};
+    Json j{{"images", c.images},
+           {"top_pipes", c.top_pipes},
+           {"top_recall_5mm", num(c.top_recall(5))},
+           {"top_recall_10mm", num(c.top_recall(10))},
+           {"best_correct_5mm", num(c.best_correct(5))},
+           {"best_correct_10mm", num(c.best_correct(10))},
+           {"precision_10mm", num(c.precision_10())},
+           {"estimates", c.estimates},
+           {"time_median_s", num(c.time_median_s())},
+           {"time_p95_s", num(c.time_p95_s())}};
+    if (r.has_picks) {
+      j["pick_images"] = c.pick_images;
+      j["picked_images"] = c.picked_images;
+      j["pick_rate"] = num(c.pick_rate());
+      j["picks"] = c.picks;
+      j["pick_correct_5mm"] = num(c.pick_correct_5mm());
+      j["pick_correct_5mm_count"] = c.pick_correct_5;
+      j["wrong_picks"] = c.wrong_picks;
+    }
+    return j;
   };
   Json j = {{"overall", counts(r.overall)},
             {"malformed_rows", r.malformed_rows},
             {"rows_outside_targets", r.rows_outside_targets},
+            {"pick_rows_malformed", r.pick_rows_malformed},
+            {"pick_rows_outside_targets", r.pick_rows_outside_targets},
+            {"pick_rows_extra", r.pick_rows_extra},
             {"per_object", Json::object()}};
   for (const auto& [id, c] : r.per_object) j["per_object"][std::to_string(id)] = counts(c);
   return j;

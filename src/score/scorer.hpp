@@ -18,12 +18,20 @@ struct ScoreCounts {
   int best_correct_5 = 0, best_correct_10 = 0;
   int estimates = 0, matched_10 = 0;
   std::vector<double> times_s;  // one per image that reported a time
+  // What the PLC gets (score --picks): one handed-out pose per image at most.
+  int pick_images = 0;     // images with a top pipe
+  int picked_images = 0;   // ... in which a pose is handed out
+  int picks = 0;           // handed-out poses, in any image
+  int pick_correct_5 = 0;  // ... within 5 mm of a pipe covered at most top_occlusion_max
+  int wrong_picks = 0;     // ... more than 10 mm from every such pipe
 
   double top_recall(int bound_mm) const;
   double best_correct(int bound_mm) const;
   double precision_10() const;
   double time_median_s() const;
   double time_p95_s() const;
+  double pick_rate() const;         // picked_images / pick_images
+  double pick_correct_5mm() const;  // pick_correct_5 / picks
   void add(const ScoreCounts& other);
 };
 
@@ -34,14 +42,20 @@ struct ScoreReport {
   int malformed_rows = 0;
   std::vector<std::string> malformed_examples;
   int rows_outside_targets = 0;
+  bool has_picks = false;  // the pick figures were computed (score --picks)
+  int pick_rows_malformed = 0, pick_rows_outside_targets = 0;
+  int pick_rows_extra = 0;  // second and later rows for one image (the PLC gets one pose)
 };
 
 struct ScoreParams {
-  double top_occlusion_max = 0.15;  // best-correct: the pick must be covered at most this much
+  double top_occlusion_max = 0.15;  // best-correct and picks: the pipe covered at most this much
+  double wrong_pick_mm = 10.0;      // a pick farther than this from every such pipe is wrong
 };
 
 // Reads ground truth from the dataset; throws IoError if the dataset itself is unreadable.
-ScoreReport score_results(const std::string& dataset, const ResultsFile& results, const ScoreParams& = {});
+// `picks` (optional): the pose handed out per image (eval-bop --picks); no row = DONE_NONE.
+ScoreReport score_results(const std::string& dataset, const ResultsFile& results, const ScoreParams& = {},
+                          const ResultsFile* picks = nullptr);
 
 std::string format_report(const ScoreReport& report);
 Json report_to_json(const ScoreReport& report);

@@ -15,8 +15,16 @@ SimSource::SimSource(const PipeModel& model, const SimSourceConfig& cfg)
     : model_(model), cfg_(cfg), rng_(std::uint32_t(cfg.seed)) {
   params_.pile.pipes = cfg.pipes;
   params_.max_tilt_deg = cfg.tilt_deg;
+  params_.camera_height_min_mm = cfg.camera_height_min_mm;
+  params_.camera_height_max_mm = cfg.camera_height_max_mm;
+  params_.sensor = sensor_model(cfg.sensor);
+  params_.pile.bin = bin_for_pile(model, params_.pile);
   for (std::size_t i = 0; i < model.mesh.vertices.size(); i += 4)
     vertices_.push_back(model.mesh.vertices[i].cast<double>());
+  // The tube's axis from every vertex: a subset need not be centred on it.
+  std::vector<Eigen::Vector3d> all;
+  for (const auto& v : model.mesh.vertices) all.push_back(v.cast<double>());
+  pick_symmetries_ = with_tube_turns(all, model.symmetries);
   if (!cfg.truth_file.empty() && !(truth_ = std::fopen(cfg.truth_file.c_str(), "w")))
     throw SourceError("source.sim.truth_file '" + cfg.truth_file + "': cannot write");
   fill_bin();
@@ -71,7 +79,7 @@ void SimSource::picked(const Pose& model_to_cam) {
   int best = -1;
   double best_err = kPickMatchMm;
   for (std::size_t i = 0; i < pile_.size(); ++i) {
-    const double err = mssd(vertices_, model_to_cam, world_to_cam_ * pile_[i], model_.symmetries, best_err);
+    const double err = mssd(vertices_, model_to_cam, world_to_cam_ * pile_[i], pick_symmetries_, best_err);
     if (err <= best_err) {
       best_err = err;
       best = int(i);
@@ -92,11 +100,15 @@ std::vector<Pose> SimSource::pipes_in_camera() const {
 }
 
 std::string SimSource::describe() const {
-  char text[256];
-  std::snprintf(text, sizeof text,
-                "sim: %d pipes of %s per bin, seed %d, camera tilt up to %.1f deg, %dx%d, %s", cfg_.pipes,
-                model_.source.c_str(), cfg_.seed, cfg_.tilt_deg, params_.intrinsics.width,
-                params_.intrinsics.height, cfg_.refill ? "refilled when empty" : "not refilled");
+  char text[512];
+  std::snprintf(
+      text, sizeof text,
+      "sim: %d pipes of %s per bin (%.0f x %.0f mm), seed %d, %s sensor %.0f-%.0f mm above the floor, "
+      "tilt up to %.1f deg, %dx%d, %s",
+      cfg_.pipes, model_.source.c_str(), params_.pile.bin.inner_x_mm, params_.pile.bin.inner_y_mm, cfg_.seed,
+      cfg_.sensor.c_str(), cfg_.camera_height_min_mm, cfg_.camera_height_max_mm, cfg_.tilt_deg,
+      params_.intrinsics.width, params_.intrinsics.height,
+      cfg_.refill ? "refilled when empty" : "not refilled");
   return text;
 }
 

@@ -10,6 +10,13 @@ namespace pipeloc {
 namespace {
 
 constexpr double kDeg = M_PI / 180.0;
+// bin_for_pile: a pipe up to this share of the bin's shorter side still fits in most drops (the
+// drops that leave the bin are tried again); the pile's volume spread evenly over where the
+// pipes fall is at most this high, or this many pipes thick (pipes do not slide down a heap
+// here, so a pile is taller in the middle than this).
+constexpr double kLengthShareOfSide = 0.6;
+constexpr double kPileHeightMm = 40;
+constexpr double kPileLayers = 1.5;
 
 // Model rotation that lays the pipe flat: its direction of least spread points up.
 Eigen::Matrix3d lying_rotation(const PipeModel& model) {
@@ -47,6 +54,38 @@ struct Dropper {
 };
 
 }  // namespace
+
+PileSize pile_size(const PipeModel& model, const PileParams& params) {
+  // The pipe lying flat: its extents along its axes of most, middle and least spread.
+  const Eigen::Matrix3d lying = lying_rotation(model);
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e18), hi = -lo;
+  for (const auto& p : model.surface.points) {
+    const Eigen::Vector3d q = lying * p.cast<double>();
+    lo = lo.cwiseMin(q), hi = hi.cwiseMax(q);
+  }
+  const Eigen::Vector3d extent = hi - lo;
+  PileSize size;
+  size.length_mm = std::max(extent.x(), extent.y());
+  // Pipes fall over the drop area and reach out of it by half their length on each side.
+  const double area = (params.drop_spread * params.bin.inner_x_mm + size.length_mm) *
+                      (params.drop_spread * params.bin.inner_y_mm + size.length_mm);
+  size.mean_height_mm = params.pipes * extent.x() * extent.y() * extent.z() / area;
+  size.thickness_mm = extent.z();
+  return size;
+}
+
+BinSpec bin_for_pile(const PipeModel& model, const PileParams& params) {
+  PileParams grown = params;
+  const double shorter = std::min(params.bin.inner_x_mm, params.bin.inner_y_mm);
+  for (double scale = 1.0;; scale += 0.02) {
+    grown.bin.inner_x_mm = std::ceil(params.bin.inner_x_mm * scale);
+    grown.bin.inner_y_mm = std::ceil(params.bin.inner_y_mm * scale);
+    const PileSize size = pile_size(model, grown);
+    if (size.length_mm <= kLengthShareOfSide * shorter * scale &&
+        size.mean_height_mm <= std::max(kPileHeightMm, kPileLayers * size.thickness_mm))
+      return scale == 1.0 ? params.bin : grown.bin;
+  }
+}
 
 Mesh make_bin_mesh(const BinSpec& bin) {
   Mesh mesh;

@@ -1,6 +1,7 @@
 #include "sim/sensor.hpp"
 
 #include <cmath>
+#include <stdexcept>
 
 namespace pipeloc {
 namespace {
@@ -14,6 +15,22 @@ double incidence_deg(const Eigen::Vector3f& normal, const Eigen::Vector3d& point
 }
 
 }  // namespace
+
+SensorModel sensor_model(const std::string& name) {
+  SensorModel m;
+  if (name == "kinect") return m;
+  if (name != "stereo") throw std::invalid_argument("sensor '" + name + "': expected kinect or stereo");
+  // RealSense D4xx class (Intel's depth-quality figures): RMS disparity error about 0.08 px,
+  // 1/32 px subpixel resolution, 50 mm baseline, minimum range about 0.3 m.
+  m.baseline_mm = 50;
+  m.disparity_step_px = 1.0 / 32;
+  m.disparity_sigma_px = 0.08;
+  m.min_range_mm = 300;
+  m.max_range_mm = 3000;
+  m.lateral_sigma_px = 0.5;
+  m.flying_pixel_prob = 0.5;
+  return m;
+}
 
 SensorView prepare_sensor_view(const DepthTarget& cam, const DepthTarget& proj, const Intrinsics& k,
                                const SensorModel& m) {
@@ -67,13 +84,30 @@ void apply_sensor_noise(const SensorView& view, const Intrinsics& k, const Senso
       if (uniform(rng) < m.dropout_prob) continue;
 
       const double z = view.z_mm.at(sx, sy);
-      double sigma = m.axial_sigma_mm(z);
+      double sigma = m.axial_sigma_mm(z, k.fx);
       if (theta > m.noisy_incidence_deg) sigma *= cos_noisy / std::cos(theta * kDeg);
       const double noisy = z + gauss(rng) * sigma;
       // Disparity is measured in 1/8 px: depth comes in steps.
       const double disparity = std::round(fb / noisy / m.disparity_step_px) * m.disparity_step_px;
       if (disparity <= 0) continue;
       out.at(x, y) = float(fb / disparity);
+    }
+  }
+
+  // Flying pixels: at a depth edge the matcher blends the two sides.
+  if (m.flying_pixel_prob > 0) {
+    for (int y = 1; y + 1 < h; ++y) {
+      for (int x = 1; x + 1 < w; ++x) {
+        if (out.at(x, y) <= 0) continue;
+        float lo = view.z_mm.at(x, y), hi = lo;
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dx = -1; dx <= 1; ++dx) {
+            const float z = view.z_mm.at(x + dx, y + dy);
+            if (z > 0) lo = std::min(lo, z), hi = std::max(hi, z);
+          }
+        if (hi - lo <= m.flying_edge_mm || uniform(rng) >= m.flying_pixel_prob) continue;
+        out.at(x, y) = float(lo + uniform(rng) * (hi - lo));
+      }
     }
   }
 
@@ -87,7 +121,8 @@ void apply_sensor_noise(const SensorView& view, const Intrinsics& k, const Senso
       const int r = 1 + int(uniform(rng) * m.specular_max_radius_px);
       for (int dy = -r; dy <= r; ++dy)
         for (int dx = -r; dx <= r; ++dx)
-          if (dx * dx + dy * dy <= r * r && out.inside(x + dx, y + dy) && view.label.at(x + dx, y + dy) == label)
+          if (dx * dx + dy * dy <= r * r && out.inside(x + dx, y + dy) &&
+              view.label.at(x + dx, y + dy) == label)
             out.at(x + dx, y + dy) = 0;
     }
   }

@@ -1,8 +1,10 @@
-// The structured-light sensor model of DESIGN.md (Kinect v1 / PrimeSense published figures).
+// The structured-light sensor model of DESIGN.md (Kinect v1 / PrimeSense published figures), and
+// an active-stereo one (RealSense D4xx class) with the same parts and other figures.
 #pragma once
 
 #include <cstdint>
 #include <random>
+#include <string>
 
 #include "core/camera.hpp"
 #include "render/raster.hpp"
@@ -22,8 +24,15 @@ struct SensorModel {
   int specular_max_radius_px = 3;
   double dropout_prob = 0.003;
   double min_range_mm = 500, max_range_mm = 3500;
+  // Active stereo: axial noise from the disparity noise, sigma_z = z^2 sigma_d / (f b), instead of
+  // the a + b (z - z0)^2 fit (0: use the fit).
+  double disparity_sigma_px = 0;
+  // Flying pixels: where the clean depth jumps by more than flying_edge_mm within one pixel, this
+  // share of pixels reports a blend of fore- and background (stereo matching across the edge).
+  double flying_pixel_prob = 0, flying_edge_mm = 10;
 
-  double axial_sigma_mm(double z_mm) const {
+  double axial_sigma_mm(double z_mm, double f_px) const {
+    if (disparity_sigma_px > 0) return z_mm * z_mm * disparity_sigma_px / (f_px * baseline_mm);
     const double dz = z_mm / 1000.0 - sigma_z0_m;
     return sigma_a_mm + sigma_b_mm * dz * dz;
   }
@@ -31,6 +40,11 @@ struct SensorModel {
     return z_mm * z_mm * disparity_step_px / (f_px * baseline_mm);
   }
 };
+
+// The sensor models by name: "kinect" (the default above) or "stereo" (RealSense D4xx class:
+// b = 50 mm, 0.08 px disparity noise, 1/32 px subpixel steps, flying pixels, usable from 0.3 m).
+// Throws std::invalid_argument for another name.
+SensorModel sensor_model(const std::string& name);
 
 // What stays fixed while the scene is still: the clean depth and labels, and per pixel the
 // incidence angle of the ray and whether the projector's pattern reaches it.
@@ -44,8 +58,8 @@ struct SensorView {
 SensorView prepare_sensor_view(const DepthTarget& camera, const DepthTarget& projector, const Intrinsics& k,
                                const SensorModel& model);
 // One noisy frame of a still scene into out_mm (sized like the view); allocates nothing.
-void apply_sensor_noise(const SensorView& view, const Intrinsics& k, const SensorModel& model, int pipe_labels,
-                        std::mt19937& rng, Image<float>* out_mm);
+void apply_sensor_noise(const SensorView& view, const Intrinsics& k, const SensorModel& model,
+                        int pipe_labels, std::mt19937& rng, Image<float>* out_mm);
 
 // Turns a clean render (camera view) into what the sensor reports, in mm (0 = no reading).
 // `projector` is the same scene rendered from the projector's position (camera + baseline x).
