@@ -101,6 +101,16 @@ TEST(MakePipe, NegativeBendTurnsTheOtherWay) {
   EXPECT_NEAR(hi.y(), 65, 0.01);
 }
 
+// A twisted bend turns the tube's frame, not its wall: ring vertices stay side by side, so no
+// face cuts across the inside of the tube (which would add area and samples inside it).
+TEST(MakePipe, TwistKeepsTheWallWhole) {
+  PipeSpec twisted, turned;
+  twisted.diameter_mm = turned.diameter_mm = 10;
+  twisted.segments = parse_centreline("S60,B90r30,B90r30t180,S60");
+  turned.segments = parse_centreline("S60,B90r30,B-90r30,S60");  // the same tube
+  EXPECT_NEAR(make_pipe(twisted).surface_area(), make_pipe(turned).surface_area(), 1e-3 * make_pipe(turned).surface_area());
+}
+
 // Exact symmetries are found on thin tubes as on thick ones, and whatever the mesh's resolution:
 // the tolerance follows the tube and the samples' spacing, and the half-turn is refined point to
 // plane until it lands (a leg mapped onto another slides into place).
@@ -115,7 +125,8 @@ TEST(PipeModel, ExactSymmetriesWhateverTheTubeAndTheMesh) {
       {"S50,B120r40,S50", 12, 1},         // line-arc-line
       {"S60,B180r40,S60", 8, 1},          // U with equal legs
       {"S40,B60r50,S50,B-60r50,S40", 25, 1},
-      {"S30,B120r45t90,B90r45,S30", 16, 0},  // a coil: near-symmetric only
+      {"S60,B90r30,B90r30t180,S60", 10, 1},    // the same S, its second bend twisted round
+      {"S30,B120r45t90,B90r45t90,S30", 16, 0},  // a coil: near-symmetric only
       {"S120,B160r35,S20", 14, 0},           // a hook
   };
   for (const Case& c : cases)
@@ -138,7 +149,7 @@ TEST(PipeModel, ExactSymmetriesWhateverTheTubeAndTheMesh) {
 TEST(PipeModel, NearSymmetriesAreHalfTurnsMappingMostOfTheSurfaceOntoItself) {
   PipeSpec coil_spec;
   coil_spec.diameter_mm = 16;
-  coil_spec.segments = parse_centreline("S30,B120r45t90,B90r45,S30");
+  coil_spec.segments = parse_centreline("S30,B120r45t90,B90r45t90,S30");
   const PipeModel coil = derive_pipe_model(make_pipe(coil_spec), "coil");
   EXPECT_TRUE(coil.symmetries.empty());
   ASSERT_EQ(coil.near_symmetries.size(), 1u);

@@ -124,7 +124,7 @@ Pose half_turn(const Eigen::Vector3d& axis, const Eigen::Vector3f& centre) {
 // An exact symmetry lands this share of the samples on the surface (the rest: sharp edges).
 constexpr float kSymmetryMinShare = 0.99f;
 // Its refinement starts with pairs this many tolerances apart (12 x 0.08 D: about a diameter).
-constexpr float kSymmetryGateStartOfTolerance = 12;
+constexpr float kSymmetryGateStartOfTolerance = 12, kSymmetryGateEndOfTolerance = 6;
 
 // What both half-turn searches start from: the surface's principal axes (the half-turns are
 // about them) and its samples indexed for closest points.
@@ -237,9 +237,12 @@ std::vector<Pose> find_symmetries(const SurfaceSamples& surface, const Eigen::Ve
   // The refinement starts a tube diameter wide (the tolerance is a share of it): the principal
   // axes of a long thin part tilt by a degree with sampling noise, millimetres at its ends.
   const float gate_start = kSymmetryGateStartOfTolerance * tolerance_mm + 2 * spacing_mm;
+  // ... and ends half as wide: the pairs of an exact symmetry all come close, and keeping the far
+  // ones (a leg's end a few mm off) pulls it in; a part that only nearly maps onto itself is
+  // pulled askew by them and fails the landing test below, as it should.
+  const float gate_end = kSymmetryGateEndOfTolerance * tolerance_mm + spacing_mm;
   for (int axis = 0; axis < 3; ++axis) {
-    const Pose m = refine_half_turn(surface, indexed, centroid, axis, stride, gate_start,
-                                    tolerance_mm + spacing_mm);
+    const Pose m = refine_half_turn(surface, indexed, centroid, axis, stride, gate_start, gate_end);
     // Every sample must land on the surface, but for the few at sharp edges (end caps' rims)
     // where the samples' own planes are a mesh-discretisation artefact.
     const LandingShare share = landing_share(surface, indexed, m, stride, tolerance_mm, spacing_mm);
