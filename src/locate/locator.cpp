@@ -38,16 +38,19 @@ const char* outcome_name(CandidateOutcome o) {
 
 Locator::Locator(const PipeModel& model, const LocateConfig& cfg, const Intrinsics& camera)
     : model_(model),
-      cfg_(cfg),
+      user_cfg_(cfg),
+      cfg_(with_model_thresholds(cfg, model.tube_diameter_mm)),
       workers_(std::size_t(std::max(1, cfg.threads))),
       pool_(std::max(1, cfg.threads)) {
-  lm_ = prepare_locator_model(model, float(cfg.refine_inlier_mm) + 4.0f, cfg);
+  lm_ = prepare_locator_model(model, max_refine_inlier_mm(cfg, model.tube_diameter_mm) + 4.0f, cfg);
   starts_ = prepare_starts(lm_, cfg);
   reserve_zbuffer(&zb_, cfg.zbuffer_max_side_mm, cfg.zbuffer_pixel_mm);
   camera_width_ = camera.width, camera_height_ = camera.height;
   reserve_zbuffer_points(&zb_points_, camera.width, camera.height, pool_.size());
   reserve_normals(&nm_, zb_, pool_.size());
   holes_.reserve(zb_);
+  constexpr int kHeightBinsMm = 8192;  // heights over 8 m in one frame are not a bin
+  height_histogram_.assign(std::size_t(kHeightBinsMm), 0);
   band_holes_.assign(std::size_t(pool_.size()), 0);
   reserve_regions(&rb_, zb_, cfg, lm_.tube_d_mm, lm_.extent_l_mm);
 
@@ -84,6 +87,9 @@ const LocateOutput& Locator::locate(const Image<float>& depth, const CameraInfo&
   out_.budget_exhausted = false;
   out_.regions = {};
   const Pose bin_to_cam = bin_to_camera(camera);
+  // The thresholds that follow the sensor: its noise and pixel footprint, measured in this frame.
+  out_.noise = measure_depth_noise(depth, &noise_histograms_);
+  set_frame_thresholds(user_cfg_, model_.tube_diameter_mm, out_.noise, camera.intrinsics, &cfg_);
   // Anytime: what is not expected to finish before the deadline is not started. The expected
   // durations are running averages of earlier cycles (none yet: everything is tried).
   if (deadline != Clock::time_point::max() && t_start + ms_duration(serial_ms_avg_) > deadline) {
@@ -94,6 +100,10 @@ const LocateOutput& Locator::locate(const Image<float>& depth, const CameraInfo&
 
   auto t = Clock::now();
   build_zbuffer_banded(depth, camera, bin_to_cam);
+  // The floor: the height only 2 % of the visible surface lies under (noise takes the lowest cells
+  // of a seen floor a little deeper, which errs on the side of keeping a pose).
+  constexpr float kLowestSurfaceShare = 0.02f;
+  out_.lowest_surface_z_mm = lowest_surface_z(zb_, kLowestSurfaceShare, &height_histogram_);
   out_.times.zbuffer_ms = ms_since(t);
 
   t = Clock::now();
@@ -419,7 +429,8 @@ void Locator::work_candidate(int c, Worker& wk, const Image<float>& depth, const
     e.model_to_bin = refined.pose;
     e.model_to_cam = bin_to_cam * refined.pose;
     e.check = verify_pose(lm_.verify_mesh, lm_.verify_winding, e.model_to_cam, depth, camera.intrinsics,
-                          float(cfg_.verify_tolerance_mm), &wk.scratch_depth, &wk.scratch_mesh);
+                          float(cfg_.verify_tolerance_mm), float(cfg_.side_drop_of_d) * d, &wk.scratch_depth,
+                          &wk.scratch_mesh);
     wk.times.verify_ms += ms_since(t0);
     e.ridge_cost_mm = ridge_cost_mm;
     e.ridge_points = trace.ridge_count;
@@ -466,8 +477,19 @@ void Locator::work_candidate(int c, Worker& wk, const Image<float>& depth, const
   PipeEstimate& e = best;
   trace.check = e.check;
   trace.refined_to_cam = e.model_to_cam;
+  // Beyond the paper: a smooth blob fits a pipe's top as well as a pipe does, but a pipe's sides
+  // drop away from it. Too few side pixels say nothing (a pipe seen edge-on to the shadows).
+  constexpr int kMinSidePx = 20;
+  const bool blob = e.check.side_px >= kMinSidePx && e.check.side_level() > float(cfg_.verify_max_side_level);
+  // Nor does a pipe lie under the floor: a pose with much of the model more than D/4 below the
+  // lowest surface seen (a third of a tube sunk to its axis) is not one.
+  constexpr float kMaxShareBelowFloor = 0.3f, kBelowFloorOfD = 0.25f;
+  const bool below_floor =
+      !std::isnan(out_.lowest_surface_z_mm) &&
+      share_below(lm_.verify_mesh, e.model_to_bin, out_.lowest_surface_z_mm - kBelowFloorOfD * d) >
+          kMaxShareBelowFloor;
   if (e.check.agreement() < float(cfg_.verify_min_agreement) ||
-      e.check.free_space() > float(cfg_.verify_max_free_space)) {
+      e.check.free_space() > float(cfg_.verify_max_free_space) || blob || below_floor) {
     trace.outcome = CandidateOutcome::not_confirmed;
     return;
   }
