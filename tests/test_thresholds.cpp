@@ -41,7 +41,9 @@ TEST(DepthNoise, MeasuredFromTheFrameWhateverTheSlopeAndEdges) {
 }
 
 TEST(Thresholds, FollowTheTubeAndTheNoiseUnlessGiven) {
-  LocateConfig user;  // every derived key at 0
+  LocateConfig user;  // every derived key at 0 (the noise-dependent ones have fixed defaults)
+  user.continuity_step_max_mm = user.verify_tolerance_mm = user.refine_inlier_mm = 0;
+  user.hole_fill_mm = user.normal_window_mm = 0;
   Intrinsics k;
   const LocateConfig thin = with_model_thresholds(user, 10), thick = with_model_thresholds(user, 40);
   EXPECT_LT(thin.hole_fill_mm, thick.hole_fill_mm);
@@ -63,7 +65,7 @@ TEST(Thresholds, FollowTheTubeAndTheNoiseUnlessGiven) {
   EXPECT_NEAR(paper.refine_inlier_mm, 4, 0.5);
   EXPECT_NEAR(paper.normal_window_mm, 6.3, 0.1);
   // A value given is used as given.
-  LocateConfig pinned;
+  LocateConfig pinned = user;
   pinned.verify_tolerance_mm = 5;
   pinned.hole_fill_mm = 3;
   LocateConfig in_effect = with_model_thresholds(pinned, 40);

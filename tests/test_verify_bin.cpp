@@ -2,10 +2,12 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <random>
 
 #include "locate/locator.hpp"
 #include "model/make_pipe.hpp"
 #include "model/pipe_model.hpp"
+#include "locate_fixtures.hpp"
 
 namespace pipeloc {
 namespace {
@@ -29,6 +31,8 @@ Scene straight_tube_scene(double axis_z_mm, double surround_z_mm) {
   s.camera.world_to_cam = w2c;
   s.depth.resize(k.width, k.height, 0.0f);
   const double r = kTubeMm / 2, half_length = 75;
+  std::mt19937 rng(5);
+  std::normal_distribution<double> noise(0.0, 1.0);  // an active-stereo sensor's axial noise at 0.9 m
   for (int v = 0; v < k.height; ++v)
     for (int u = 0; u < k.width; ++u) {
       // The ray in the world frame from the camera at (0, 0, H); its camera depth is the parameter t.
@@ -44,7 +48,7 @@ Scene straight_tube_scene(double axis_z_mm, double surround_z_mm) {
         const double hit = (-b - std::sqrt(disc)) / (2 * a);
         if (hit > 0 && std::abs(hit * d.x()) <= half_length) t = std::min(t, hit);
       }
-      s.depth.at(u, v) = float(t);
+      s.depth.at(u, v) = float(t + noise(rng));
     }
   return s;
 }
@@ -59,37 +63,51 @@ const PipeModel& straight_tube() {
   return model;
 }
 
-int pickable(const LocateOutput& out) {
-  int n = 0;
-  for (const PipeEstimate& e : out.estimates) n += e.pickable;
-  return n;
-}
-
-TEST(BinAwareVerification, APipeOnTheFloorIsPickedAndTheSameTopOnASmoothBlobIsNot) {
+// The model drawn at the true pose: its sides drop away on the floor, and stay level on a blob
+// whose flanks go on from its silhouette (decide() rejects a pose over 0.6 level: test_decide).
+TEST(BinAwareVerification, APipesSidesDropAwayASmoothBlobsDoNot) {
   const PipeModel& model = straight_tube();
-  LocateConfig cfg;
-  const Scene on_floor = straight_tube_scene(kTubeMm / 2, 0);
-  Locator loc(model, cfg, on_floor.camera.intrinsics);
-  EXPECT_EQ(pickable(loc.locate(on_floor.depth, on_floor.camera)), 1);
-  // The same top, its flanks going on at the axis' height: a smooth blob, not a pipe.
-  const Scene blob = straight_tube_scene(kTubeMm / 2, kTubeMm / 2);
-  EXPECT_EQ(pickable(loc.locate(blob.depth, blob.camera)), 0);
+  const LocatorModel lm = prepare_locator_model(model, 8, LocateConfig{});
+  const auto verify_at = [&](const Scene& s, double axis_z_mm) {
+    // The model's frame: the tube from x = 0 to 150 along its x axis (make_pipe), centred here.
+    Pose m2w = Pose::Identity();
+    m2w.translation() = Eigen::Vector3d(-75, 0, axis_z_mm);
+    const Pose m2c = *s.camera.world_to_cam * m2w;
+    Image<float> scratch(s.camera.intrinsics.width, s.camera.intrinsics.height, 0.0f);
+    ProjectedMesh projected;
+    projected.reserve(lm.verify_mesh);
+    return verify_pose(lm.verify_mesh, lm.verify_winding, m2c, s.depth, s.camera.intrinsics, 7.0f,
+                       0.25f * float(kTubeMm), &scratch, &projected);
+  };
+  const Verification on_floor = verify_at(straight_tube_scene(kTubeMm / 2, 0), kTubeMm / 2);
+  EXPECT_GT(on_floor.agreement(), 0.9);
+  EXPECT_GE(on_floor.side_px, kMinSidePx);
+  EXPECT_LT(on_floor.side_level(), 0.1);
+  // The blob: flanks a fifth of the tube above its axis, going on level from its silhouette.
+  const Verification blob = verify_at(straight_tube_scene(kTubeMm / 2, 0.7 * kTubeMm), kTubeMm / 2);
+  EXPECT_GT(blob.agreement(), 0.9);  // the top alone fits as well as a pipe's
+  EXPECT_GE(blob.side_px, kMinSidePx);
+  EXPECT_GT(blob.side_level(), LocateConfig{}.verify_max_side_level);
 }
 
+// On a simulated bin (floor at z = 0) the floor is found, a pipe's pose lies on it, and the same
+// pose four diameters lower lies under it.
 TEST(BinAwareVerification, NoPoseBelowTheFloor) {
-  const PipeModel& model = straight_tube();
-  const Scene on_floor = straight_tube_scene(kTubeMm / 2, 0);
-  LocateConfig cfg;
-  Locator loc(model, cfg, on_floor.camera.intrinsics);
-  const LocateOutput& out = loc.locate(on_floor.depth, on_floor.camera);
-  EXPECT_NEAR(out.lowest_surface_z_mm, 0, 1.5);  // the floor, seen around the pipe
+  const PipeModel& model = preset_model("sbend");
+  const SimulatedScene s = pile_of(model, 3, 4);
+  Locator loc(model, LocateConfig{}, s.camera.intrinsics);
+  const LocateOutput& out = loc.locate(s.depth_mm, s.camera);
+  EXPECT_NEAR(out.lowest_surface_z_mm, 0, 5);  // noise takes the 2nd percentile a little deeper
   ASSERT_FALSE(out.estimates.empty());
-  const Pose lying = out.estimates[0].model_to_bin;
-  const float below = out.lowest_surface_z_mm - 0.25f * float(kTubeMm);
-  EXPECT_LT(share_below(model.mesh, lying, below), 0.05);
-  Pose sunk = lying;  // the same pipe a diameter lower: under the floor
-  sunk.translation().z() -= kTubeMm;
-  EXPECT_GT(share_below(model.mesh, sunk, below), 0.9);
+  const float d = model.tube_diameter_mm;
+  const float below = out.lowest_surface_z_mm - kBelowFloorOfD * d;
+  for (const PipeEstimate& e : out.estimates) {
+    EXPECT_LT(share_below(model.mesh, e.model_to_bin, below), kMaxShareBelowFloor);
+    EXPECT_EQ(e.check.below_floor, share_below(loc.locator_model().verify_mesh, e.model_to_bin, below));
+    Pose sunk = e.model_to_bin;
+    sunk.translation().z() -= 4 * d;  // under the floor whatever it lay on
+    EXPECT_GT(share_below(model.mesh, sunk, below), 0.9);
+  }
 }
 
 }  // namespace

@@ -60,7 +60,7 @@ void WorkerPool::loop(int worker) {
   }
 }
 
-void WorkerPool::run(int tasks, Task fn, void* context) {
+void WorkerPool::run_erased(int tasks, Task fn, void* context) {
   {
     std::lock_guard<std::mutex> lock(mutex_);
     fn_ = fn;

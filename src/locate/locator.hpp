@@ -10,49 +10,10 @@
 #include "core/camera.hpp"
 #include "core/clock.hpp"
 #include "core/worker_pool.hpp"
-#include "locate/icp.hpp"
-#include "locate/principal_axis.hpp"
-#include "locate/regions.hpp"
+#include "locate/candidate.hpp"
 #include "locate/thresholds.hpp"
-#include "locate/verify.hpp"
 
 namespace pipeloc {
-
-struct PipeEstimate {
-  Pose model_to_bin = Pose::Identity();
-  Pose model_to_cam = Pose::Identity();
-  float score = 0;  // share of the model's silhouette the sensor confirms, lowered when occluded or ambiguous
-  float ridge_cost_mm = 0;  // Algorithm 2 residual (mean truncated ridge distance)
-  int ridge_points = 0;     // observed Z-ridge points of the region
-  int refine_inliers = 0;
-  int refine_points = 0;  // observed region points the refinement used
-  float refine_rms_mm = 0;
-  Verification check;
-  bool ambiguous = false;  // another pose of the model fits about as well (torus-like pipes)
-  bool pickable = false;   // accepted, not lying under another pipe, not ambiguous
-  int candidate = -1;      // index of its candidate region
-};
-
-// Why a candidate did not become an estimate.
-enum class CandidateOutcome {
-  accepted,
-  few_ridge_points,
-  residual_too_high,
-  not_confirmed,
-  duplicate,
-  budget
-};
-const char* outcome_name(CandidateOutcome o);
-
-struct CandidateTrace {
-  AxisEstimate axis;
-  int ridge_begin = 0, ridge_count = 0;  // observed ridge points in Locator::ridge_points()
-  Pose ridge_pose = Pose::Identity();    // after Algorithm 2, before refinement
-  float ridge_cost_mm = 0;
-  Pose refined_to_cam = Pose::Identity();  // the best refined fit, accepted or not
-  Verification check;                      // of the best refined fit
-  CandidateOutcome outcome = CandidateOutcome::budget;
-};
 
 struct StageTimes {
   double zbuffer_ms = 0, normals_ms = 0, regions_ms = 0, axis_ms = 0, ridge_icp_ms = 0, refine_ms = 0,
@@ -98,21 +59,11 @@ class Locator {
  private:
   // Per-thread working memory for candidates.
   struct Worker {
-    AxisBuffers ab;
-    IcpBuffers icp;
-    std::vector<Eigen::Vector3f> region_pts;
-    std::vector<Eigen::Vector3f> coarse_ridge;    // the region's Z-ridge on the probes' cells
-    std::vector<Eigen::Vector3f> coarse_in_axis;  // the same in the frame of the observed axis
-    std::vector<RidgeFit> fits;
-    std::vector<SlidStart> starts;
-    Image<float> scratch_depth;
-    ProjectedMesh scratch_mesh;
-    StageTimes times;
+    CandidateBuffers buf;
     int candidates_done = 0;  // this cycle, for the running average of a candidate's time
     double candidate_ms_sum = 0;
   };
   struct Frame {  // what the candidate tasks of one locate() share
-    Locator* self;
     const Image<float>* depth;
     const CameraInfo* camera;
     Pose bin_to_cam;
@@ -129,19 +80,13 @@ class Locator {
     bool regions_done = false;
     double serial_ms = 0;  // from the start of the cycle to the last region
   };
-  static void regions_and_candidates_task(void* handout, int task, int worker);
-  static void candidate_task(void* frame, int c, int worker);
-  void work_candidate(int c, Worker& wk, const Image<float>& depth, const CameraInfo& camera,
-                      const Pose& bin_to_cam, Clock::time_point deadline);
+  void regions_and_candidates(Handout& h, int task, int worker);
+  void candidate_task(const Frame& f, int c, int worker);
+  void work_candidate(int c, Worker& wk, const Frame& f);
   void merge_estimate(int c);
   // Row bands of the frame-wide stages: band b of n covers rows [band_begin(b), band_begin(b + 1)).
   static int band_begin(int band, int bands, int rows) { return rows * band / bands; }
   void build_zbuffer_banded(const Image<float>& depth, const CameraInfo& camera, const Pose& bin_to_cam);
-  // RidgeFit::seen_through of a fit ridge_icp has just returned (its model ridge is still in wk.icp).
-  float seen_through(const RidgeFit& f, const Worker& wk) const {
-    return seen_through_share(zb_, wk.icp.model_ridge.data(), f.model_ridge_points,
-                              float(cfg_.verify_tolerance_mm));
-  }
   bool out_of_time(Clock::time_point deadline) const {
     return (cancel_ && cancel_->load(std::memory_order_relaxed)) || Clock::now() >= deadline;
   }

@@ -27,7 +27,14 @@ struct Verification {
   int side_px = 0;        // pixels a few steps outside the silhouette with a reading not in front
   int side_level_px = 0;  // ... whose depth lies within the drop of the silhouette's
   float side_level() const { return side_px ? float(side_level_px) / float(side_px) : 0.f; }
+  float below_floor = 0;  // share of the model more than kBelowFloorOfD * D under the lowest surface seen
 };
+
+// A pose is under the floor when more than this share of its model lies more than this * D below
+// the lowest surface seen (a third of a tube sunk to its axis); a blob when its sides do not drop
+// away (judged on at least this many side pixels).
+constexpr float kMaxShareBelowFloor = 0.3f, kBelowFloorOfD = 0.25f;
+constexpr int kMinSidePx = 20;
 
 // scratch: camera-sized image whose contents are overwritten in the model's box; projected:
 // reserved for the mesh. winding: of the mesh, if closed (its back faces are then not drawn).

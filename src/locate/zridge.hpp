@@ -20,6 +20,9 @@ struct RidgeBuffers {
   std::vector<int> index;           // per point taken: its index in the input
 };
 
+// Runs of ridge points narrower than this share of D are noise or a pipe's end, not its ridge.
+constexpr float kRidgeMinRunOfD = 0.3f;
+
 void reserve_ridge(RidgeBuffers* rb, float max_extent_mm, float cell_mm, int max_points = 0);
 
 // points: bin frame. axis: unit in XY. Writes at most `capacity` ridge points to out and

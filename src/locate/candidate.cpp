@@ -1,0 +1,360 @@
+#include "locate/candidate.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace pipeloc {
+namespace {
+
+// IV-B: the frame of the observed axis: X along the measured principal direction, the measured
+// centre at the origin. The initial states are placed by it.
+Pose axis_frame(const AxisEstimate& est) {
+  Pose place = Pose::Identity();
+  place.linear() =
+      Eigen::AngleAxisd(std::atan2(est.axis.y(), est.axis.x()), Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  place.translation() = est.centre.cast<double>();
+  return place;
+}
+
+// RidgeFit::seen_through of a fit RidgeIcp::fit has just returned (its model ridge is still there).
+float seen_through(const CandidateContext& ctx, const RidgeFit& f, const CandidateBuffers& buf) {
+  return seen_through_share(ctx.zb, buf.icp.model_ridge(), f.model_ridge_points,
+                            float(ctx.cfg.verify_tolerance_mm));
+}
+
+// A check of decide(): the candidate fails as `outcome` unless `passes`, once the evidence has
+// reached `after`.
+struct Check {
+  CandidateStage after;
+  CandidateOutcome outcome;
+  bool (*passes)(const Evidence& e, const LocateConfig& cfg);
+};
+
+// decide()'s checks, in the order of the stages. A new check is a row here (and, if it needs
+// evidence no stage gives yet, a field of Evidence that the stage fills).
+constexpr Check kChecks[] = {
+    {CandidateStage::observed_ridge, CandidateOutcome::few_ridge_points,
+     [](const Evidence& e, const LocateConfig&) { return e.ridge_points >= kMinRidgePoints; }},
+    {CandidateStage::ridge_fits, CandidateOutcome::residual_too_high,
+     [](const Evidence& e, const LocateConfig& cfg) {
+       return e.least_ridge_cost_mm <= residual_max_mm(cfg, e.tube_d_mm);
+     }},
+    {CandidateStage::hypotheses, CandidateOutcome::not_confirmed,
+     [](const Evidence& e, const LocateConfig& cfg) {
+       return !(e.best.agreement() < float(cfg.verify_min_agreement));
+     }},
+    {CandidateStage::hypotheses, CandidateOutcome::not_confirmed,
+     [](const Evidence& e, const LocateConfig& cfg) {
+       return !(e.best.free_space() > float(cfg.verify_max_free_space));
+     }},
+    // Beyond the paper: a smooth blob fits a pipe's top as well as a pipe does, but a pipe's sides
+    // drop away from it (too few side pixels say nothing: a pipe among shadows).
+    {CandidateStage::hypotheses, CandidateOutcome::not_confirmed,
+     [](const Evidence& e, const LocateConfig& cfg) {
+       return e.best.side_px < kMinSidePx || !(e.best.side_level() > float(cfg.verify_max_side_level));
+     }},
+    // ... and no pipe lies under the floor.
+    {CandidateStage::hypotheses, CandidateOutcome::not_confirmed,
+     [](const Evidence& e, const LocateConfig&) { return !(e.best.below_floor > kMaxShareBelowFloor); }},
+};
+
+}  // namespace
+
+const char* outcome_name(CandidateOutcome o) {
+  switch (o) {
+    case CandidateOutcome::accepted:
+      return "accepted";
+    case CandidateOutcome::few_ridge_points:
+      return "few_ridge_points";
+    case CandidateOutcome::residual_too_high:
+      return "residual_too_high";
+    case CandidateOutcome::not_confirmed:
+      return "not_confirmed";
+    case CandidateOutcome::duplicate:
+      return "duplicate";
+    case CandidateOutcome::budget:
+      return "budget";
+  }
+  return "?";
+}
+
+Decision decide(const Evidence& e, const LocateConfig& cfg) {
+  Decision out;
+  for (const Check& check : kChecks) {
+    if (int(check.after) > int(e.reached)) break;
+    if (!check.passes(e, cfg)) {
+      out.decided = true;
+      out.outcome = check.outcome;
+      return out;
+    }
+  }
+  if (e.reached != CandidateStage::hypotheses) return out;
+  // A rival the image judges about as well makes the pipe ambiguous, whether or not it passes the
+  // thresholds itself: the best passing them by a hair and a rival failing them by one are the same.
+  out.decided = true;
+  out.outcome = CandidateOutcome::accepted;
+  out.ambiguous = e.have_second && hypothesis_quality(e.second) >=
+                                       hypothesis_quality(e.best) - float(cfg.ambiguity_quality_margin);
+  out.score =
+      e.best.agreement() * (1.0f - e.best.occluded()) * (out.ambiguous ? kAmbiguousScoreFactor : 1.0f);
+  out.pickable = !out.ambiguous && e.best.occluded() <= float(cfg.verify_max_occluded);
+  return out;
+}
+
+void reserve_candidate(CandidateBuffers* buf, const LocatorModel& lm, const StartSet& starts,
+                       const LocateConfig& cfg, int max_region_cells, int ridge_capacity, int z_width,
+                       int z_height, const Intrinsics& camera) {
+  reserve_axis(&buf->ab, max_region_cells, z_width, z_height);
+  reserve_ridge(&buf->ridge, lm.extent_l_mm + 2 * lm.tube_d_mm, float(cfg.ridge_cell_mm),
+                std::max(max_region_cells, int(lm.ridge_samples.size())));
+  buf->icp.reserve(lm, cfg, ridge_capacity);
+  reserve_slide(&buf->slide, lm, ridge_capacity, float(cfg.ridge_cell_mm));
+  buf->region_pts.assign(std::size_t(max_region_cells), Eigen::Vector3f::Zero());
+  buf->coarse_ridge.assign(std::size_t(ridge_capacity), Eigen::Vector3f::Zero());
+  buf->coarse_in_axis.assign(std::size_t(ridge_capacity), Eigen::Vector3f::Zero());
+  buf->fits.reserve(std::size_t(starts.size()));
+  buf->starts.reserve(buf->fits.capacity());
+  buf->scratch_depth.resize(camera.width, camera.height, 0.0f);
+  buf->scratch_mesh.reserve(lm.verify_mesh);
+}
+
+AxisEstimate find_axis(const CandidateContext& ctx, const CandidateInput& in, CandidateBuffers* buf) {
+  const auto t = Clock::now();
+  const CandidateRegion& region = *in.region;
+  const AxisEstimate axis = estimate_axis(ctx.zb, in.cells, region.cells_end - region.cells_begin,
+                                          region.core_centroid, ctx.cfg, ctx.lm.tube_d_mm, &buf->ab);
+  buf->times.axis_ms += ms_since(t);
+  return axis;
+}
+
+ObservedRidge observe_ridge(const CandidateContext& ctx, const CandidateInput& in, const AxisEstimate& axis,
+                            CandidateBuffers* buf) {
+  const auto t = Clock::now();
+  ObservedRidge out;
+  out.region_points = in.region->cells_end - in.region->cells_begin;
+  const int w = ctx.zb.z.width;
+  for (int k = 0; k < out.region_points; ++k)
+    buf->region_pts[std::size_t(k)] = ctx.zb.point(in.cells[k] % w, in.cells[k] / w);
+  out.count = extract_zridge(buf->region_pts.data(), out.region_points, axis.axis,
+                             float(ctx.cfg.ridge_cell_mm), kRidgeMinRunOfD * ctx.lm.tube_d_mm, &buf->ridge,
+                             in.ridge, in.ridge_capacity, ctx.cfg.match_surface);
+  buf->times.ridge_icp_ms += ms_since(t);
+  return out;
+}
+
+RidgeFits fit_ridges(const CandidateContext& ctx, const CandidateInput& in, const AxisEstimate& axis,
+                     const ObservedRidge& observed, const Deadline& deadline, CandidateBuffers* buf) {
+  const auto t = Clock::now();
+  const LocateConfig& cfg = ctx.cfg;
+  const LocatorModel& lm = ctx.lm;
+  const StartSet& starts = ctx.starts;
+  const float d = lm.tube_d_mm;
+  RidgeFits out;
+  std::vector<RidgeFit>& fits = buf->fits;
+  fits.clear();
+  // The probes rank the starts on coarser ridges of the same region.
+  const float probe_cell = starts.cell_mm;
+  const int n_coarse = extract_zridge(buf->region_pts.data(), observed.region_points, axis.axis, probe_cell,
+                                      kRidgeMinRunOfD * d, &buf->ridge, buf->coarse_ridge.data(),
+                                      in.ridge_capacity, cfg.match_surface);
+  // Every start is slid to where it best covers the observed ridge ...
+  const Pose axis_to_bin = axis_frame(axis);
+  const Pose bin_to_axis = axis_to_bin.inverse();
+  for (int k = 0; k < n_coarse; ++k)
+    buf->coarse_in_axis[std::size_t(k)] =
+        (bin_to_axis * buf->coarse_ridge[std::size_t(k)].cast<double>()).cast<float>();
+  const RidgeView coarse{buf->coarse_ridge.data(), n_coarse, axis.axis, probe_cell};
+  const RidgeView fine_ridge{in.ridge, observed.count, axis.axis, float(cfg.ridge_cell_mm)};
+  buf->slide.observed_top.build(buf->coarse_ridge.data(), n_coarse, probe_cell, d);
+  buf->starts.clear();
+  for (int s = 0; s < starts.size(); ++s)
+    buf->starts.push_back(
+        slide_start(lm, starts, s, axis_to_bin, buf->coarse_in_axis.data(), n_coarse, cfg, &buf->slide));
+  // ... and those whose ridge covers it best are probed; the most promising continue to convergence.
+  std::sort(buf->starts.begin(), buf->starts.end(),
+            [](const SlidStart& a, const SlidStart& b) { return a.cost_mm < b.cost_mm; });
+  if (int(buf->starts.size()) > cfg.icp_probed_states) buf->starts.resize(std::size_t(cfg.icp_probed_states));
+  for (const SlidStart& st : buf->starts) {
+    // A slow configuration probes long: the deadline (or a shutdown) is checked per start.
+    if (deadline.passed()) {
+      buf->times.ridge_icp_ms += ms_since(t);
+      return out;
+    }
+    IcpStart start;
+    start.pose = st.pose;
+    start.model_ridge = starts.ridge(st.start), start.model_ridge_count = starts.ridge_count(st.start);
+    fits.push_back(buf->icp.fit(start, coarse, cfg.icp_probe_iterations));
+    fits.back().seen_through = seen_through(ctx, fits.back(), *buf);
+  }
+  const auto by_rank = [d](const RidgeFit& x, const RidgeFit& y) { return x.rank_cost(d) < y.rank_cost(d); };
+  std::sort(fits.begin(), fits.end(), by_rank);
+  // Several starts fall into the same basin: the states continued are distinct ones (more than
+  // a diameter apart), so that a runner-up basin, the right one as often as not, is not crowded out.
+  int distinct = 0;
+  for (std::size_t i = 0; i < fits.size(); ++i) {
+    bool seen = false;
+    for (int j = 0; j < distinct && !seen; ++j)
+      seen = pose_distance_mm(lm, fits[i].pose, fits[std::size_t(j)].pose, d) < d;
+    if (!seen)
+      std::rotate(fits.begin() + distinct, fits.begin() + long(i), fits.begin() + long(i) + 1), ++distinct;
+  }
+  const int keep = std::min(int(fits.size()), cfg.icp_continued_states);
+  for (int i = 0; i < keep; ++i) {
+    if (deadline.passed()) {
+      buf->times.ridge_icp_ms += ms_since(t);
+      return out;
+    }
+    RidgeFit& f = fits[std::size_t(i)];
+    // Continued on the coarse ridges, then the last icp_fine_iterations on the fine ones.
+    const int left = std::max(1, cfg.icp_max_iterations - f.iterations);
+    const int fine = std::min(left, cfg.icp_fine_iterations);
+    if (left > fine)  // (not evaluated: the fine iterations go on from its pose at once)
+      f = buf->icp.steps(IcpStart{f.pose, f.gate_mm}, coarse, left - fine);
+    f = buf->icp.fit(IcpStart{f.pose, f.gate_mm}, fine_ridge, fine);
+    f.seen_through = seen_through(ctx, f, *buf);
+  }
+  fits.resize(std::size_t(keep));
+  if (deadline.passed()) {
+    buf->times.ridge_icp_ms += ms_since(t);
+    return out;
+  }
+  std::sort(fits.begin(), fits.end(), by_rank);
+  buf->times.ridge_icp_ms += ms_since(t);
+  out.complete = true;
+  if (!fits.empty()) out.best_pose = fits[0].pose, out.best_cost_mm = fits[0].cost_mm;
+  for (const RidgeFit& f : fits) out.least_cost_mm = std::min(out.least_cost_mm, f.cost_mm);
+  return out;
+}
+
+Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& in,
+                            const ObservedRidge& observed, const Deadline& deadline, CandidateBuffers* buf) {
+  const LocateConfig& cfg = ctx.cfg;
+  const LocatorModel& lm = ctx.lm;
+  const std::vector<RidgeFit>& fits = buf->fits;
+  Hypotheses out;
+  // The refinement needs far fewer points than the region holds: keep an even subset.
+  const int count = observed.region_points;
+  const int stride = std::max(1, count / cfg.refine_max_points);
+  int refine_count = 0;
+  for (int k = 0; k < count; k += stride)
+    buf->region_pts[std::size_t(refine_count++)] = buf->region_pts[std::size_t(k)];
+
+  // Beyond the paper: the least ridge residual is not always the right state (ridges of curved
+  // pipes fit in more than one way). The best few distinct states under R_th are refined on the
+  // whole region, point to plane, and the depth image judges them (no floating, no sinking, no
+  // upside-down pipe). A runner-up the image confirms about as well makes the pipe ambiguous.
+  const float r_th = residual_max_mm(cfg, lm.tube_d_mm);
+  const float ambiguity_mm = float(cfg.ambiguity_pose_mm);
+  PipeEstimate &best = out.best, &second = out.second;
+  bool &have_best = out.have_best, &have_second = out.have_second;
+  // Refines a hypothesis on the region, has the image judge it, and keeps the best two that are
+  // more than ambiguity_pose_mm apart.
+  const auto judge = [&](const Pose& start, float ridge_cost_mm) {
+    auto t0 = Clock::now();
+    const RefineResult refined = refine_on_surface(lm, start, buf->region_pts.data(), refine_count, cfg);
+    buf->times.refine_ms += ms_since(t0);
+    t0 = Clock::now();
+    PipeEstimate e;
+    e.model_to_bin = refined.pose;
+    e.model_to_cam = ctx.bin_to_cam * refined.pose;
+    e.check = verify_pose(lm.verify_mesh, lm.verify_winding, e.model_to_cam, ctx.depth, ctx.camera,
+                          float(cfg.verify_tolerance_mm), float(cfg.side_drop_of_d) * lm.tube_d_mm,
+                          &buf->scratch_depth, &buf->scratch_mesh);
+    if (!std::isnan(ctx.lowest_surface_z_mm))
+      e.check.below_floor = share_below(lm.verify_mesh, e.model_to_bin,
+                                        ctx.lowest_surface_z_mm - kBelowFloorOfD * lm.tube_d_mm);
+    buf->times.verify_ms += ms_since(t0);
+    e.ridge_cost_mm = ridge_cost_mm;
+    e.ridge_points = observed.count;
+    e.refine_inliers = refined.inliers;
+    e.refine_points = refine_count;
+    e.refine_rms_mm = refined.rms_mm;
+    e.candidate = in.index;
+    const float q = hypothesis_quality(e.check);
+    if (!have_best || q > hypothesis_quality(best.check)) {
+      if (have_best && pose_distance_mm(lm, best.model_to_bin, e.model_to_bin, ambiguity_mm) > ambiguity_mm)
+        second = best, have_second = true;
+      best = e, have_best = true;
+    } else if (!have_second || q > hypothesis_quality(second.check)) {
+      if (pose_distance_mm(lm, best.model_to_bin, e.model_to_bin, ambiguity_mm) > ambiguity_mm)
+        second = e, have_second = true;
+    }
+  };
+  int tried = 0;
+  for (std::size_t i = 0; i < fits.size() && tried < cfg.verify_hypotheses; ++i) {
+    if (fits[i].cost_mm > r_th) continue;
+    bool seen = false;
+    for (std::size_t j = 0; j < i && !seen; ++j)
+      seen = fits[j].cost_mm <= r_th &&
+             pose_distance_mm(lm, fits[i].pose, fits[j].pose, ambiguity_mm) < ambiguity_mm;
+    if (seen) continue;
+    if (deadline.passed()) return out;  // an unchecked runner-up could hide an ambiguity
+    ++tried;
+    judge(fits[i].pose, fits[i].cost_mm);
+  }
+  // Beyond the paper: a near-symmetric part (a half-turn maps most of it onto itself) seen only
+  // where the two poses agree fits both equally; the ridge ICP need not have reached the other.
+  // The twin of the best hypothesis is judged too, so that the ambiguity is found, or the twin
+  // taken when the image prefers it. A twin the runner-up already stands for is not judged again.
+  if (have_best) {
+    const Pose found = best.model_to_bin;  // judging a twin may replace the best: twins of this one
+    const float found_cost_mm = best.ridge_cost_mm;
+    for (const Pose& half_turn : ctx.model.near_symmetries) {
+      const Pose twin = found * half_turn;
+      if (have_second && pose_distance_mm(lm, twin, second.model_to_bin, ambiguity_mm) <= ambiguity_mm)
+        continue;
+      if (deadline.passed()) return out;
+      judge(twin, found_cost_mm);
+    }
+  }
+  out.complete = true;
+  return out;
+}
+
+bool work_candidate(const CandidateContext& ctx, const CandidateInput& in, const Deadline& deadline,
+                    CandidateBuffers* buf, CandidateTrace* trace, PipeEstimate* estimate) {
+  Evidence evidence;
+  evidence.tube_d_mm = ctx.lm.tube_d_mm;
+  // Between two stages: decided by the evidence so far, or out of time. A candidate cut short
+  // leaves no estimate (its outcome stays "budget").
+  const auto settled = [&] {
+    const Decision decision = decide(evidence, ctx.cfg);
+    if (decision.decided) trace->outcome = decision.outcome;
+    return decision.decided || deadline.passed();
+  };
+
+  trace->axis = find_axis(ctx, in, buf);
+  if (settled()) return false;
+
+  const ObservedRidge observed = observe_ridge(ctx, in, trace->axis, buf);
+  trace->ridge_count = observed.count;
+  evidence.reached = CandidateStage::observed_ridge;
+  evidence.ridge_points = observed.count;
+  if (settled()) return false;
+
+  const RidgeFits fits = fit_ridges(ctx, in, trace->axis, observed, deadline, buf);
+  if (!fits.complete) return false;
+  trace->ridge_pose = fits.best_pose;
+  trace->ridge_cost_mm = fits.best_cost_mm;
+  evidence.reached = CandidateStage::ridge_fits;
+  evidence.least_ridge_cost_mm = fits.least_cost_mm;
+  if (settled()) return false;
+
+  const Hypotheses judged = judge_hypotheses(ctx, in, observed, deadline, buf);
+  if (!judged.complete) return false;
+  trace->check = judged.best.check;
+  trace->refined_to_cam = judged.best.model_to_cam;
+  evidence.reached = CandidateStage::hypotheses;
+  evidence.have_best = judged.have_best, evidence.have_second = judged.have_second;
+  evidence.best = judged.best.check, evidence.second = judged.second.check;
+  const Decision decision = decide(evidence, ctx.cfg);
+  trace->outcome = decision.outcome;
+  if (decision.outcome != CandidateOutcome::accepted) return false;
+  *estimate = judged.best;
+  estimate->ambiguous = decision.ambiguous;
+  estimate->score = decision.score;
+  estimate->pickable = decision.pickable;
+  return true;
+}
+
+}  // namespace pipeloc

@@ -1,0 +1,192 @@
+// One candidate region through the paper's steps as named stages, each returning what it found:
+// axis (III) -> observed ridge (IV-A) -> ridge fits (IV-B: slide the starts, probe, continue) ->
+// hypotheses (beyond the paper: refine, verify, judge the twins) -> decide(). work_candidate()
+// runs them and checks the deadline between them; decide() alone turns the evidence into the
+// outcome.
+#pragma once
+
+#include <cmath>
+
+#include <atomic>
+#include <vector>
+
+#include "core/camera.hpp"
+#include "core/clock.hpp"
+#include "locate/principal_axis.hpp"
+#include "locate/regions.hpp"
+#include "locate/ridge_icp.hpp"
+#include "locate/starts.hpp"
+#include "locate/surface_refine.hpp"
+#include "locate/verify.hpp"
+
+namespace pipeloc {
+
+// Fewer observed ridge points than this give no fit worth the ICP (IV-A): a sliver of a region.
+constexpr int kMinRidgePoints = 10;
+// Ranks verified hypotheses: a pixel the sensor saw through counts twice against the agreement,
+// since a model lying over empty space is wrong however much else it covers.
+constexpr float kFreeSpaceWeight = 2.0f;
+// An ambiguous estimate keeps half its score: it ranks below a sure one of about the same cover.
+constexpr float kAmbiguousScoreFactor = 0.5f;
+
+struct PipeEstimate {
+  Pose model_to_bin = Pose::Identity();
+  Pose model_to_cam = Pose::Identity();
+  float score = 0;  // share of the model's silhouette the sensor confirms, lowered when occluded or ambiguous
+  float ridge_cost_mm = 0;  // Algorithm 2 residual (mean truncated ridge distance)
+  int ridge_points = 0;     // observed Z-ridge points of the region
+  int refine_inliers = 0;
+  int refine_points = 0;  // observed region points the refinement used
+  float refine_rms_mm = 0;
+  Verification check;
+  bool ambiguous = false;  // another pose of the model fits about as well (torus-like pipes)
+  bool pickable = false;   // accepted, not lying under another pipe, not ambiguous
+  int candidate = -1;      // index of its candidate region
+};
+
+// Why a candidate did not become an estimate.
+enum class CandidateOutcome {
+  accepted,
+  few_ridge_points,
+  residual_too_high,
+  not_confirmed,
+  duplicate,
+  budget
+};
+const char* outcome_name(CandidateOutcome o);
+
+struct CandidateTrace {
+  AxisEstimate axis;
+  int ridge_begin = 0, ridge_count = 0;  // observed ridge points in Locator::ridge_points()
+  Pose ridge_pose = Pose::Identity();    // after Algorithm 2, before refinement
+  float ridge_cost_mm = 0;
+  Pose refined_to_cam = Pose::Identity();  // the best refined fit, accepted or not
+  Verification check;                      // of the best refined fit
+  CandidateOutcome outcome = CandidateOutcome::budget;
+};
+
+// What decide() knows of a candidate: each stage adds its part.
+enum class CandidateStage { axis, observed_ridge, ridge_fits, hypotheses };
+struct Evidence {
+  CandidateStage reached = CandidateStage::axis;  // the last stage done
+  float tube_d_mm = 0;                            // D of the model
+  int ridge_points = 0;                           // observed_ridge: observed Z-ridge points
+  float least_ridge_cost_mm = 1e30f;              // ridge_fits: least residual of the states continued
+  bool have_best = false, have_second = false;    // hypotheses: the best judged, and a rival
+  Verification best, second;                      // ... more than ambiguity_pose_mm from it
+};
+
+struct Decision {
+  bool decided = false;  // false: the evidence so far passes every check it can answer
+  CandidateOutcome outcome = CandidateOutcome::budget;
+  bool ambiguous = false;
+  bool pickable = false;
+  float score = 0;
+};
+
+// The outcome of a candidate from its evidence: the first check it fails (in the order of the
+// stages), or accepted with ambiguity, pick and score once the hypotheses are judged. The checks
+// are a table in candidate.cpp: a new verification check is one row there. ("duplicate" is the
+// locator's, across candidates; "budget" is the outcome of a candidate never decided.)
+Decision decide(const Evidence& evidence, const LocateConfig& cfg);
+
+// R_th of Algorithm 2: ridge fits with a larger residual are not pursued.
+inline float residual_max_mm(const LocateConfig& cfg, float tube_d_mm) {
+  return float(cfg.residual_max_of_d) * tube_d_mm;
+}
+// How well the image confirms a hypothesis: what ranks hypotheses and finds ambiguities.
+inline float hypothesis_quality(const Verification& v) {
+  return v.agreement() - kFreeSpaceWeight * v.free_space();
+}
+
+// The deadline a candidate's work stops at (a cancel flag, when set, ends it as well).
+struct Deadline {
+  Clock::time_point at = Clock::time_point::max();
+  const std::atomic<bool>* cancel = nullptr;
+  bool passed() const { return (cancel && cancel->load(std::memory_order_relaxed)) || Clock::now() >= at; }
+};
+
+// What the stages share from the model and the frame; read only.
+struct CandidateContext {
+  const PipeModel& model;
+  const LocatorModel& lm;
+  const StartSet& starts;
+  const LocateConfig& cfg;
+  const ZBuffer& zb;
+  const Image<float>& depth;
+  const Intrinsics& camera;
+  Pose bin_to_cam;
+  float lowest_surface_z_mm = NAN;  // bin frame: the floor where it is seen (LocateOutput)
+};
+
+struct CandidateTimes {
+  double axis_ms = 0, ridge_icp_ms = 0, refine_ms = 0, verify_ms = 0;
+};
+
+// Per-thread working memory of the stages, sized once.
+struct CandidateBuffers {
+  AxisBuffers ab;
+  RidgeBuffers ridge;  // for the observed ridges
+  RidgeIcp icp;
+  SlideBuffers slide;
+  std::vector<Eigen::Vector3f> region_pts;
+  std::vector<Eigen::Vector3f> coarse_ridge;    // the region's Z-ridge on the probes' cells
+  std::vector<Eigen::Vector3f> coarse_in_axis;  // the same in the frame of the observed axis
+  std::vector<RidgeFit> fits;
+  std::vector<SlidStart> starts;
+  Image<float> scratch_depth;
+  ProjectedMesh scratch_mesh;
+  CandidateTimes times;
+};
+// ridge_capacity: the most observed ridge points of a region; z_width, z_height: the Z-buffer's.
+void reserve_candidate(CandidateBuffers* buf, const LocatorModel& lm, const StartSet& starts,
+                       const LocateConfig& cfg, int max_region_cells, int ridge_capacity, int z_width,
+                       int z_height, const Intrinsics& camera);
+
+// The region a candidate works, and where its observed ridge goes.
+struct CandidateInput {
+  int index = -1;  // of the candidate region
+  const CandidateRegion* region = nullptr;
+  const int* cells = nullptr;  // its cells' indices in the Z-buffer
+  Eigen::Vector3f* ridge = nullptr;
+  int ridge_capacity = 0;
+};
+
+// III: principal direction and initial position.
+AxisEstimate find_axis(const CandidateContext& ctx, const CandidateInput& in, CandidateBuffers* buf);
+
+// IV-A: the observed Z-ridge of the region, in in.ridge; the region's points stay in buf->region_pts.
+struct ObservedRidge {
+  int count = 0;          // ridge points
+  int region_points = 0;  // in buf->region_pts
+};
+ObservedRidge observe_ridge(const CandidateContext& ctx, const CandidateInput& in, const AxisEstimate& axis,
+                            CandidateBuffers* buf);
+
+// IV-B, Algorithm 2: ridge ICP from the slid, probed and continued starts, in buf->fits ranked best
+// first.
+struct RidgeFits {
+  bool complete = false;  // false: the deadline passed first
+  Pose best_pose = Pose::Identity();
+  float best_cost_mm = 1e30f;   // of the best ranked
+  float least_cost_mm = 1e30f;  // least of all
+};
+RidgeFits fit_ridges(const CandidateContext& ctx, const CandidateInput& in, const AxisEstimate& axis,
+                     const ObservedRidge& observed, const Deadline& deadline, CandidateBuffers* buf);
+
+// Beyond the paper: the best few distinct fits under R_th and the twins of the best are refined
+// on the region and judged by the depth image; the best two more than ambiguity_pose_mm apart.
+struct Hypotheses {
+  bool complete = false;  // false: the deadline passed first
+  PipeEstimate best, second;
+  bool have_best = false, have_second = false;
+};
+Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& in,
+                            const ObservedRidge& observed, const Deadline& deadline, CandidateBuffers* buf);
+
+// The stages in order, the deadline checked between them, decide() after each. Fills the trace;
+// returns true with the estimate when the candidate is accepted.
+bool work_candidate(const CandidateContext& ctx, const CandidateInput& in, const Deadline& deadline,
+                    CandidateBuffers* buf, CandidateTrace* trace, PipeEstimate* estimate);
+
+}  // namespace pipeloc

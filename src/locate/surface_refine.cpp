@@ -1,0 +1,91 @@
+#include "locate/surface_refine.hpp"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+
+namespace pipeloc {
+namespace {
+
+// Residuals beyond this (mm, about 3 sigma of the sensor's noise at 1.1 m) weigh less (Huber):
+// a point of a neighbouring pipe inside the inlier distance does not pull the fit.
+constexpr float kHuberMm = 1.5f;
+// Fewer inliers than this cannot hold six degrees of freedom against the noise: stop.
+constexpr int kMinInliers = 12;
+
+}  // namespace
+
+RefineResult refine_on_surface(const LocatorModel& lm, const Pose& start, const Eigen::Vector3f* obs, int n,
+                               const LocateConfig& cfg) {
+  RefineResult res;
+  res.pose = start;
+  const float inlier = float(cfg.refine_inlier_mm);
+  // Coarse to fine: all but the last kFineIterations use every third point; the last (and the
+  // reported inliers and rms) all of them.
+  constexpr int kFineIterations = 3, kCoarseStride = 3;
+  const int fine_from = std::max(0, cfg.refine_iterations - kFineIterations);
+  for (int it = 0; it < cfg.refine_iterations; ++it) {
+    const int stride = it < fine_from ? kCoarseStride : 1;
+    const Eigen::Matrix3f r = res.pose.linear().cast<float>();
+    const Eigen::Vector3f t = res.pose.translation().cast<float>();
+    const Eigen::Matrix3f rt = r.transpose();
+    const Eigen::Vector3f c = r * lm.centroid + t;  // linearise about the model's centroid
+    Eigen::Matrix<double, 6, 6> a = Eigen::Matrix<double, 6, 6>::Zero();
+    Eigen::Matrix<double, 6, 1> b = Eigen::Matrix<double, 6, 1>::Zero();
+    int inliers = 0;
+    double sq = 0;
+    // Look-ups first, a batch at a time, then the sums: the batch's cache misses overlap instead
+    // of each waiting for the last.
+    constexpr int kBatch = 16;
+    Eigen::Vector3f batch_q[kBatch];
+    const LocatorModel::Sample* batch_s[kBatch];
+    for (int i0 = 0; i0 < n; i0 += stride * kBatch) {
+      const int in_batch = std::min(kBatch, (n - i0 + stride - 1) / stride);
+      for (int k = 0; k < in_batch; ++k) {
+        batch_q[k] = rt * (obs[i0 + k * stride] - t);  // observed point in the model frame
+        batch_s[k] = lm.nearest_sample(batch_q[k]);
+      }
+      for (int k = 0; k < in_batch; ++k) {
+        const Eigen::Vector3f& q = batch_q[k];
+        const LocatorModel::Sample* s = batch_s[k];
+        if (!s) continue;
+        const Eigen::Vector3f diff = q - s->p;
+        if (diff.squaredNorm() > inlier * inlier) continue;
+        const Eigen::Vector3f nw = r * s->n;
+        const Eigen::Vector3f mw = r * s->p + t - c;
+        const float res_i = nw.dot(r * diff);  // observed minus model, along the normal
+        // Moving the model by (w, v) changes the model point by w x m + v.
+        Eigen::Matrix<double, 6, 1> j;
+        j.head<3>() = mw.cross(nw).cast<double>();
+        j.tail<3>() = nw.cast<double>();
+        const double w = std::abs(res_i) < kHuberMm ? 1.0 : double(kHuberMm) / std::abs(res_i);
+        const Eigen::Matrix<double, 6, 1> wj = w * j;
+        // The lower triangle only (the solve reads no more); mirrored once per iteration.
+        for (int col = 0; col < 6; ++col)
+          for (int row = col; row < 6; ++row) a(row, col) += wj(row) * j(col);
+        b += wj * double(res_i);
+        ++inliers;
+        sq += double(res_i) * res_i;
+      }
+    }
+    a.triangularView<Eigen::StrictlyUpper>() = a.transpose();
+    res.inliers = inliers * stride;  // about: only the fine iterations count them all
+    res.rms_mm = inliers ? float(std::sqrt(sq / inliers)) : 0.f;
+    if (inliers < kMinInliers) break;
+    const Eigen::Matrix<double, 6, 1> x = a.ldlt().solve(b);
+    if (!x.allFinite()) break;
+    Pose delta = Pose::Identity();
+    const double angle = x.head<3>().norm();
+    if (angle > 1e-12) delta.linear() = Eigen::AngleAxisd(angle, x.head<3>() / angle).toRotationMatrix();
+    const Eigen::Vector3d cd = c.cast<double>();
+    delta.translation() = cd - delta.linear() * cd + x.tail<3>();
+    res.pose = delta * res.pose;
+    if (x.tail<3>().norm() < 0.01 && angle < 1e-4) {
+      if (stride == 1) break;
+      it = fine_from - 1;  // converged on the subset: go on to the fine iterations
+    }
+  }
+  return res;
+}
+
+}  // namespace pipeloc

@@ -1,0 +1,61 @@
+// Helpers of the localizer's tests: preset models, simulated frames, synthetic Z-buffers.
+#pragma once
+
+#include <map>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "locate/locator.hpp"
+#include "model/make_pipe.hpp"
+#include "score/mssd.hpp"
+#include "sim/scene.hpp"
+
+namespace pipeloc {
+
+inline const PipeModel& preset_model(const std::string& name) {
+  static std::map<std::string, PipeModel> models;
+  auto it = models.find(name);
+  if (it == models.end())
+    it = models.emplace(name, derive_pipe_model(make_pipe(pipe_preset(name)), name)).first;
+  return it->second;
+}
+
+inline double pose_error(const PipeModel& m, const Pose& a, const Pose& b) {
+  std::vector<Eigen::Vector3d> v;
+  for (const auto& p : m.mesh.vertices) v.push_back(p.cast<double>());
+  return mssd(v, a, b, m.symmetries, 1e9);
+}
+
+// Fills a Z-buffer with z = f(x, y) on a 1 mm grid.
+template <typename F>
+ZBuffer synthetic_zbuffer(int size, F f) {
+  ZBuffer zb;
+  reserve_zbuffer(&zb, size, 1.0);
+  zb.width = zb.height = size;
+  for (int j = 0; j < size; ++j)
+    for (int i = 0; i < size; ++i) zb.z.at(i, j) = f(double(i), double(j));
+  return zb;
+}
+
+// A frame of one pipe lying alone in the bin, with the sensor model's noise.
+struct OnePipe {
+  SimulatedScene scene;
+  LocateConfig cfg;
+};
+
+inline OnePipe one_pipe(const std::string& preset, unsigned seed) {
+  std::mt19937 rng(seed);
+  SceneParams p;
+  p.pile.pipes = 1;
+  return {simulate_scene(preset_model(preset), p, rng), LocateConfig{}};
+}
+
+inline SimulatedScene pile_of(const PipeModel& model, int pipes, unsigned seed) {
+  std::mt19937 rng(seed);
+  SceneParams p;
+  p.pile.pipes = pipes;
+  return simulate_scene(model, p, rng);
+}
+
+}  // namespace pipeloc

@@ -1,0 +1,141 @@
+// decide(): every outcome a candidate's evidence can give, one row each, at the default config.
+#include <gtest/gtest.h>
+
+#include "locate/candidate.hpp"
+
+namespace pipeloc {
+namespace {
+
+// A verification of 1000 model pixels with the given counts.
+Verification seen(int agree_px, int free_space_px, int occluded_px) {
+  Verification v;
+  v.model_px = 1000;
+  v.agree_px = agree_px, v.free_space_px = free_space_px, v.occluded_px = occluded_px;
+  return v;
+}
+
+constexpr float kD = 20;  // tube diameter (mm): R_th = 0.35 * 20 = 7 mm at the default config
+
+// The same with its sides read: `level` of `side_px` side pixels lie at the silhouette's depth.
+Verification with_sides(Verification v, int side_px, int level) {
+  v.side_px = side_px, v.side_level_px = level;
+  return v;
+}
+
+Verification below_floor(Verification v, float share) {
+  v.below_floor = share;
+  return v;
+}
+
+Evidence after_ridge(int ridge_points) {
+  Evidence e;
+  e.tube_d_mm = kD;
+  e.reached = CandidateStage::observed_ridge;
+  e.ridge_points = ridge_points;
+  return e;
+}
+
+Evidence after_fits(float least_cost_mm) {
+  Evidence e = after_ridge(40);
+  e.reached = CandidateStage::ridge_fits;
+  e.least_ridge_cost_mm = least_cost_mm;
+  return e;
+}
+
+Evidence judged(Verification best) {
+  Evidence e = after_fits(3);
+  e.reached = CandidateStage::hypotheses;
+  e.have_best = true;
+  e.best = best;
+  return e;
+}
+
+Evidence judged_with_rival(Verification best, Verification second) {
+  Evidence e = judged(best);
+  e.have_second = true;
+  e.second = second;
+  return e;
+}
+
+struct Row {
+  const char* name;
+  Evidence evidence;
+  bool decided;
+  CandidateOutcome outcome;
+  bool ambiguous, pickable;
+  float score;
+};
+
+TEST(Decide, EveryOutcomeFromItsEvidence) {
+  const Row rows[] = {
+      // Not yet decided: nothing fails that the stages so far can answer.
+      {"axis only", Evidence{}, false, CandidateOutcome::budget, false, false, 0},
+      {"enough ridge points", after_ridge(kMinRidgePoints), false, CandidateOutcome::budget, false, false, 0},
+      {"ridge fit within R_th", after_fits(6.9f), false, CandidateOutcome::budget, false, false, 0},
+      // Rejected, at the first check that fails.
+      {"few ridge points", after_ridge(kMinRidgePoints - 1), true, CandidateOutcome::few_ridge_points, false,
+       false, 0},
+      {"residual above R_th", after_fits(7.1f), true, CandidateOutcome::residual_too_high, false, false, 0},
+      {"agreement under 0.7", judged(seen(690, 0, 0)), true, CandidateOutcome::not_confirmed, false, false,
+       0},
+      {"free space over 0.05", judged(seen(900, 51, 0)), true, CandidateOutcome::not_confirmed, false, false,
+       0},
+      {"sides level: a smooth blob", judged(with_sides(seen(900, 0, 0), 100, 61)), true,
+       CandidateOutcome::not_confirmed, false, false, 0},
+      {"a third under the floor", judged(below_floor(seen(900, 0, 0), 0.31f)), true,
+       CandidateOutcome::not_confirmed, false, false, 0},
+      {"nothing judged",
+       [] {
+         Evidence e = judged(Verification{});
+         e.have_best = false;
+         return e;
+       }(),
+       true, CandidateOutcome::not_confirmed, false, false, 0},
+      // Accepted: score = agreement * (1 - occluded), halved when ambiguous.
+      {"accepted and pickable", judged(seen(900, 10, 100)), true, CandidateOutcome::accepted, false, true,
+       0.81f},
+      {"sides drop away", judged(with_sides(seen(900, 0, 0), 100, 59)), true,
+       CandidateOutcome::accepted, false, true, 0.9f},
+      {"too few side pixels to judge", judged(with_sides(seen(900, 0, 0), kMinSidePx - 1, kMinSidePx - 1)),
+       true, CandidateOutcome::accepted, false, true, 0.9f},
+      {"resting on the floor", judged(below_floor(seen(900, 0, 0), 0.29f)), true, CandidateOutcome::accepted,
+       false, true, 0.9f},
+      {"accepted under another pipe", judged(seen(800, 0, 200)), true, CandidateOutcome::accepted, false,
+       false, 0.64f},
+      {"rival about as good: ambiguous", judged_with_rival(seen(900, 0, 0), seen(860, 0, 0)), true,
+       CandidateOutcome::accepted, true, false, 0.45f},
+      {"rival failing by a hair: still ambiguous", judged_with_rival(seen(700, 0, 0), seen(690, 0, 0)), true,
+       CandidateOutcome::accepted, true, false, 0.35f},
+      {"rival clearly worse", judged_with_rival(seen(900, 0, 0), seen(840, 0, 0)), true,
+       CandidateOutcome::accepted, false, true, 0.9f},
+      {"rival seen through: worse", judged_with_rival(seen(900, 0, 0), seen(900, 30, 0)), true,
+       CandidateOutcome::accepted, false, true, 0.9f},
+  };
+  const LocateConfig cfg;
+  for (const Row& row : rows) {
+    SCOPED_TRACE(row.name);
+    const Decision d = decide(row.evidence, cfg);
+    EXPECT_EQ(d.decided, row.decided);
+    if (!row.decided) continue;
+    EXPECT_STREQ(outcome_name(d.outcome), outcome_name(row.outcome));
+    EXPECT_EQ(d.ambiguous, row.ambiguous);
+    EXPECT_EQ(d.pickable, row.pickable);
+    EXPECT_NEAR(d.score, row.score, 1e-5f);
+  }
+}
+
+// The checks follow the config's thresholds, not fixed numbers.
+TEST(Decide, ThresholdsComeFromTheConfig) {
+  LocateConfig cfg;
+  cfg.residual_max_of_d = 0.5;  // R_th = 10 mm
+  EXPECT_FALSE(decide(after_fits(9), cfg).decided);
+  cfg.verify_min_agreement = 0.6;
+  EXPECT_EQ(decide(judged(seen(650, 0, 0)), cfg).outcome, CandidateOutcome::accepted);
+  cfg.verify_max_occluded = 0.3;
+  EXPECT_TRUE(decide(judged(seen(800, 0, 200)), cfg).pickable);
+  cfg.ambiguity_quality_margin = 0.01;
+  EXPECT_FALSE(decide(judged_with_rival(seen(900, 0, 0), seen(860, 0, 0)), cfg).ambiguous);
+}
+
+}  // namespace
+}  // namespace pipeloc

@@ -1,0 +1,82 @@
+// The localizer end to end on simulated frames.
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+#include "locate/locator.hpp"
+#include "locate_fixtures.hpp"
+
+namespace pipeloc {
+namespace {
+
+TEST(Locator, EndToEndPickIsATopPipe) {
+  const PipeModel& model = preset_model("sbend");
+  const SimulatedScene s = pile_of(model, 10, 8);
+  LocateConfig cfg;
+  Locator loc(model, cfg, s.camera.intrinsics);
+  const LocateOutput& out = loc.locate(s.depth_mm, s.camera);
+  const int pick = out.pick();
+  ASSERT_GE(pick, 0);
+  double best = 1e9;
+  std::size_t g_best = 0;
+  for (std::size_t g = 0; g < s.model_to_world.size(); ++g) {
+    const double e = pose_error(model, out.estimates[std::size_t(pick)].model_to_cam, s.model_to_cam(g));
+    if (e < best) best = e, g_best = g;
+  }
+  EXPECT_LT(best, 5.0);
+  EXPECT_LE(s.info[g_best].occ_by_pipes, 0.15);
+}
+
+// A near-symmetric pipe (a half-turn swaps its ends and lands its surface within D/4 of itself):
+// where a pile shows only the common surface, the image cannot tell the pose from its twin. No
+// pose handed out as pickable may be the twin of a pipe instead of the pipe (106 mm off at the
+// ends): either the right one is taken or the estimate loses its confidence. Without the twin
+// judged, 13 of 40 pickable poses on these 12 piles were twins; with it, 1 of 7 (a twin the image
+// confirms better than the pipe's own pose, 0.92 against 0.75 agreement).
+TEST(Locator, NoPickablePoseIsTheTwinOfANearSymmetricPipe) {
+  PipeSpec spec;
+  spec.diameter_mm = 16;
+  spec.segments = parse_centreline("S30,B120r45t90,B90r45t90,S30");
+  const PipeModel model = derive_pipe_model(make_pipe(spec), "coil");
+  ASSERT_EQ(model.near_symmetries.size(), 1u);
+  const Pose& twin = model.near_symmetries[0];
+  LocateConfig cfg;
+  int pickable = 0, twins_picked = 0;
+  for (unsigned seed = 1; seed <= 12; ++seed) {
+    const SimulatedScene s = pile_of(model, 20, seed);
+    Locator loc(model, cfg, s.camera.intrinsics);
+    for (const PipeEstimate& e : loc.locate(s.depth_mm, s.camera).estimates) {
+      if (!e.pickable) continue;
+      ++pickable;
+      double at_truth = 1e9, at_twin = 1e9;
+      for (std::size_t g = 0; g < s.model_to_world.size(); ++g) {
+        at_truth = std::min(at_truth, pose_error(model, e.model_to_cam, s.model_to_cam(g)));
+        at_twin = std::min(at_twin, pose_error(model, e.model_to_cam, s.model_to_cam(g) * twin));
+      }
+      twins_picked += at_truth > 10 && at_twin < 5;
+    }
+  }
+  EXPECT_GE(pickable, 1);
+  EXPECT_LE(5 * twins_picked, pickable) << twins_picked << " of " << pickable << " pickable poses are twins";
+}
+
+TEST(Locator, EmptyAndInvalidFramesGiveNothingAndDoNotCrash) {
+  const PipeModel& model = preset_model("u");
+  LocateConfig cfg;
+  Intrinsics k;
+  Locator loc(model, cfg, k);
+  CameraInfo cam;
+  cam.intrinsics = k;
+  Image<float> depth(k.width, k.height, 0.0f);
+  EXPECT_TRUE(loc.locate(depth, cam).estimates.empty());
+  depth.fill(std::nanf(""));
+  EXPECT_TRUE(loc.locate(depth, cam).estimates.empty());
+  depth.fill(1000.0f);  // a flat floor: upward everywhere, but no pipe
+  EXPECT_TRUE(loc.locate(depth, cam).estimates.empty());
+}
+
+}  // namespace
+}  // namespace pipeloc

@@ -1,0 +1,213 @@
+// IV-B: nearest points, pose distances, the ridge ICP and its starts.
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+#include "locate/locator.hpp"
+#include "locate_fixtures.hpp"
+
+namespace pipeloc {
+namespace {
+
+// Against brute force: the first of the closest points, on sets of 0 to 13 points (every tail
+// after the groups of four), drawn on a coarse grid so that ties are common.
+TEST(PointColumns, NearestIsTheFirstOfTheClosestAsBruteForce) {
+  std::mt19937 rng(7);
+  std::uniform_int_distribution<int> grid(-3, 3), near(-1, 1);
+  PointColumns columns;
+  columns.reserve(16);
+  int ties = 0;
+  for (int trial = 0; trial < 400; ++trial) {
+    const int n = trial % 14;
+    std::vector<Eigen::Vector3f> pts;
+    for (int k = 0; k < n; ++k) pts.emplace_back(float(near(rng)), float(near(rng)), 0.5f * float(near(rng)));
+    ASSERT_TRUE(columns.assign(pts.data(), n));
+    const Eigen::Vector3f q(float(grid(rng)) + 0.5f, float(grid(rng)), 0.25f * float(grid(rng)));
+    int want = -1, at_least = 0;
+    float want_d2 = 1e30f;
+    for (int k = 0; k < n; ++k) {
+      const float d2 = (pts[std::size_t(k)] - q).squaredNorm();
+      if (d2 < want_d2) want_d2 = d2, want = k;
+    }
+    for (int k = 0; k < n; ++k) at_least += (pts[std::size_t(k)] - q).squaredNorm() == want_d2;
+    ties += at_least > 1;
+    float got_d2 = 0;
+    EXPECT_EQ(columns.nearest(q, &got_d2), want) << "trial " << trial;
+    if (want >= 0) {
+      EXPECT_EQ(got_d2, want_d2) << "trial " << trial;
+    }
+  }
+  EXPECT_GT(ties, 20);  // the tie-break was put to the test
+}
+
+// Both ways from one pass: each answer is nearest()'s from that side, ties to the first included.
+TEST(PointColumns, NearestBothWaysIsNearestFromEachSide) {
+  std::mt19937 rng(11);
+  std::uniform_int_distribution<int> near(-1, 1);
+  const auto draw = [&](int n) {
+    std::vector<Eigen::Vector3f> pts;
+    for (int k = 0; k < n; ++k) pts.emplace_back(float(near(rng)), float(near(rng)), 0.5f * float(near(rng)));
+    return pts;
+  };
+  PointColumns b_columns, a_columns;
+  b_columns.reserve(16);
+  a_columns.reserve(16);
+  for (int trial = 0; trial < 300; ++trial) {
+    const int na = trial % 11, nb = (trial / 11) % 14;
+    const std::vector<Eigen::Vector3f> a = draw(na), b = draw(nb);
+    ASSERT_TRUE(b_columns.assign(b.data(), nb));
+    ASSERT_TRUE(a_columns.assign(a.data(), na));
+    std::vector<int> a_to(16), b_to(16);
+    std::vector<float> a_d2(16), b_d2(16);
+    b_columns.nearest_both_ways(a.data(), na, a_to.data(), a_d2.data(), b_to.data(), b_d2.data());
+    for (int i = 0; i < na; ++i) {
+      float d2 = 0;
+      EXPECT_EQ(a_to[std::size_t(i)], b_columns.nearest(a[std::size_t(i)], &d2)) << "trial " << trial;
+      EXPECT_EQ(a_d2[std::size_t(i)], d2) << "trial " << trial;
+    }
+    for (int j = 0; j < nb; ++j) {
+      float d2 = 0;
+      EXPECT_EQ(b_to[std::size_t(j)], a_columns.nearest(b[std::size_t(j)], &d2)) << "trial " << trial;
+      if (na > 0) {
+        EXPECT_EQ(b_d2[std::size_t(j)], d2) << "trial " << trial;
+      }
+    }
+  }
+}
+
+// A bound only cuts short what lies beyond it: up to the bound the distance is the exact one, and
+// beyond it the value returned lies beyond it too (models with and without symmetries).
+TEST(PoseDistance, ExactUpToTheBoundAndBeyondItPastIt) {
+  LocateConfig cfg;
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-1, 1);
+  for (const char* name : {"sbend", "torus"}) {
+    const LocatorModel lm = prepare_locator_model(preset_model(name), 8, cfg);
+    int below = 0, beyond = 0;
+    for (int trial = 0; trial < 400; ++trial) {
+      Pose a = Pose::Identity(), b = Pose::Identity();
+      a.linear() = Eigen::AngleAxisd(u(rng) * M_PI, Eigen::Vector3d(u(rng), u(rng), 1).normalized())
+                       .toRotationMatrix();
+      a.translation() = Eigen::Vector3d(u(rng), u(rng), u(rng)) * 100;
+      const double scale = std::pow(10.0, 2 * u(rng) - 1);  // small and large moves
+      b.linear() =
+          Eigen::AngleAxisd(0.05 * scale * u(rng), Eigen::Vector3d::UnitZ()).toRotationMatrix() * a.linear();
+      b.translation() = a.translation() + Eigen::Vector3d(u(rng), u(rng), u(rng)) * 3 * scale;
+      const float exact = pose_distance_mm(lm, a, b);
+      for (const float bound : {1.0f, 5.0f, 10.0f, 50.0f}) {
+        const float cut = pose_distance_mm(lm, a, b, bound);
+        if (exact <= bound) {
+          EXPECT_EQ(cut, exact) << name << " trial " << trial << " bound " << bound;
+          ++below;
+        } else {
+          EXPECT_GT(cut, bound) << name << " trial " << trial << " bound " << bound;
+          ++beyond;
+        }
+      }
+    }
+    EXPECT_GT(below, 200) << name;
+    EXPECT_GT(beyond, 200) << name;
+  }
+}
+
+// IV-B: from the paper's ranges (about the axis up to +-70 degrees, 3 cm along it) the ridge
+// ICP with refinement converges on the pipe.
+TEST(RidgeIcp, ConvergesFromThePapersRanges) {
+  OnePipe s = one_pipe("sbend", 4);
+  const PipeModel& model = preset_model("sbend");
+  Locator loc(model, s.cfg, s.scene.camera.intrinsics);
+  const LocateOutput& out = loc.locate(s.scene.depth_mm, s.scene.camera);
+  ASSERT_GE(out.traces.size(), 1u);
+  const CandidateTrace& t = out.traces[0];
+  ASSERT_GE(t.ridge_count, 10);
+  const Pose truth = s.scene.model_to_world[0];
+  const Eigen::Vector3d c = truth * model.centroid.cast<double>();
+  const Eigen::Vector3d axis(t.axis.axis.x(), t.axis.axis.y(), 0);
+  RidgeIcp icp;
+  icp.reserve(loc.locator_model(), s.cfg, 2000);
+  const Eigen::Vector3f* ridge = &loc.ridge_points()[std::size_t(t.ridge_begin)];
+  // The region's points, for the refinement.
+  std::vector<Eigen::Vector3f> region;
+  const auto& r = loc.regions().candidates[0];
+  for (int k = r.cells_begin; k < r.cells_end; ++k) {
+    const int cell = loc.regions().region_cells[std::size_t(k)];
+    region.push_back(loc.zbuffer().point(cell % loc.zbuffer().z.width, cell / loc.zbuffer().z.width));
+  }
+  for (const double deg : {-70.0, -35.0, 0.0, 35.0, 70.0}) {
+    for (const double shift : {-30.0, 30.0}) {
+      const Eigen::AngleAxisd turn(deg * M_PI / 180, axis);
+      Pose start = truth;
+      start.linear() = turn * truth.linear();
+      start.translation() = c + turn * (truth.translation() - c) + axis * shift;
+      const RidgeView observed{ridge, t.ridge_count, t.axis.axis, float(s.cfg.ridge_cell_mm)};
+      const RidgeFit fit = icp.fit(IcpStart{start}, observed, s.cfg.icp_max_iterations * 2);
+      const RefineResult ref =
+          refine_on_surface(loc.locator_model(), fit.pose, region.data(), int(region.size()), s.cfg);
+      EXPECT_LT(pose_error(model, ref.pose, truth), 5.0) << deg << " deg, " << shift << " mm";
+    }
+  }
+}
+
+// Beyond the paper: a start placed beside the pipe (one leg of the U onto the other) or along it
+// is slid back over the observed ridge before ICP. The observed ridge here is a start's own ridge
+// placed by a known axis frame; the slide must find that frame again from shifted ones.
+TEST(StartSlide, BringsAnOffsetStartBackOverTheObservedRidge) {
+  const PipeModel& model = preset_model("u");
+  LocateConfig cfg;
+  const LocatorModel lm = prepare_locator_model(model, 8.0f, cfg);
+  const StartSet starts = prepare_starts(lm, cfg);
+  ASSERT_EQ(starts.size(), 2 * cfg.initial_rotations * 6);  // 2 directions x 6 turns x 6 yaws (30 deg)
+  ASSERT_GT(lm.slide_across_mm, 2 * lm.tube_d_mm);          // a U is wider than two tubes
+  SlideBuffers buf;
+  reserve_slide(&buf, lm, 2000, float(cfg.ridge_cell_mm));
+  const float d = lm.tube_d_mm;
+  Pose truth_frame = Pose::Identity();
+  truth_frame.linear() = Eigen::AngleAxisd(0.5, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  truth_frame.translation() = Eigen::Vector3d(120, -40, 900);
+  const int s = 0;  // lying flat, not reversed, no yaw offset
+  std::vector<Eigen::Vector3f> observed, in_axis;
+  const Pose placed = truth_frame * starts.pose[s];
+  for (int i = 0; i < starts.ridge_count(s); ++i)
+    observed.push_back((placed * starts.ridge(s)[i].cast<double>()).cast<float>());
+  ASSERT_GE(observed.size(), 10u);
+  buf.observed_top.build(observed.data(), int(observed.size()), starts.cell_mm, d);
+  const float widest = std::floor(lm.slide_across_mm / d) * d;  // the furthest step across it takes
+  const Eigen::Vector3d along = truth_frame.linear().col(0), across = truth_frame.linear().col(1);
+  for (const Eigen::Vector3d& offset :
+       {Eigen::Vector3d(across * widest), Eigen::Vector3d(-across * 2 * d), Eigen::Vector3d(along * 2 * d),
+        Eigen::Vector3d(-along * 2 * d + across * d)}) {
+    Pose frame = truth_frame;
+    frame.translation() += offset;  // the measured centre is off by `offset`
+    in_axis.clear();
+    for (const auto& p : observed) in_axis.push_back((frame.inverse() * p.cast<double>()).cast<float>());
+    const SlidStart slid = slide_start(lm, starts, s, frame, in_axis.data(), int(in_axis.size()), cfg, &buf);
+    EXPECT_LT((slid.pose.translation() - placed.translation()).norm(), 0.5 * d) << offset.transpose();
+    EXPECT_LT(slid.cost_mm, 0.25f * d) << offset.transpose();
+  }
+}
+
+TEST(StartSlide, TopDistanceIsTheHorizontalDistanceUpToItsCap) {
+  TopDistance td;
+  td.reserve(64);
+  const Eigen::Vector3f pts[] = {{0, 0, 5}, {10, 0, 50}};
+  td.build(pts, 2, 1.0f, 20.0f);
+  EXPECT_NEAR(td.at(5, 0), 5.0f, 0.8f);  // between the two, heights aside
+  EXPECT_NEAR(td.at(10, 6), 6.0f, 0.8f);
+  EXPECT_FLOAT_EQ(td.at(0, 30), 20.0f);   // beyond the cap
+  EXPECT_FLOAT_EQ(td.at(500, 0), 20.0f);  // outside the grid
+}
+
+TEST(StartSlide, SeenThroughCountsOnlyPointsAboveAReadingDeeperThanTheTolerance) {
+  ZBuffer zb = synthetic_zbuffer(40, [](double i, double) { return i < 20 ? 0.0 : ZBuffer::kEmpty; });
+  const Eigen::Vector3f pts[] = {{5, 5, 10},    // 10 mm over the floor: seen through
+                                 {6, 5, 5},     // within the tolerance
+                                 {7, 5, -3},    // under the surface: hidden, not seen through
+                                 {30, 5, 10}};  // no reading there: says nothing
+  EXPECT_FLOAT_EQ(seen_through_share(zb, pts, 4, 7.0f), 0.25f);
+}
+
+}  // namespace
+}  // namespace pipeloc

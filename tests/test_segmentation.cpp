@@ -1,0 +1,234 @@
+// II-A and II-B on the locator: the banded Z-buffer and the candidate regions.
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+#include "locate/locator.hpp"
+#include "locate_fixtures.hpp"
+
+namespace pipeloc {
+namespace {
+
+// The locator builds its Z-buffer and fills its holes in row bands on its threads; one band on
+// one thread must give the same buffer, cell for cell.
+TEST(ZBufferBuild, RowBandsOnThreadsGiveTheSameBufferAsOneBand) {
+  const PipeModel& model = preset_model("sbend");
+  const SimulatedScene s = pile_of(model, 12, 5);
+  LocateConfig cfg;
+  cfg.threads = 2;
+  Locator loc(model, cfg, s.camera.intrinsics);
+  loc.locate(s.depth_mm, s.camera);
+  ZBuffer one;
+  reserve_zbuffer(&one, cfg.zbuffer_max_side_mm, cfg.zbuffer_pixel_mm);
+  ZBufferPoints pts;
+  reserve_zbuffer_points(&pts, s.depth_mm.width, s.depth_mm.height, 1);
+  HoleList holes;
+  holes.reserve(one);
+  EXPECT_GT(build_zbuffer(s.depth_mm, s.camera.intrinsics, bin_to_camera(s.camera), &pts, &one), 0);
+  const LocateConfig& used = loc.config();  // the derived thresholds in effect for that frame
+  const int passes = int(std::lround(used.hole_fill_mm / 2 / used.zbuffer_pixel_mm));
+  ASSERT_GT(passes, 0);
+  fill_small_holes(&one, passes, float(used.continuity_step_max_mm), &holes);
+  const ZBuffer& banded = loc.zbuffer();
+  ASSERT_EQ(one.width, banded.width);
+  ASSERT_EQ(one.height, banded.height);
+  EXPECT_EQ(one.origin_x_mm, banded.origin_x_mm);
+  EXPECT_EQ(one.origin_y_mm, banded.origin_y_mm);
+  int valid = 0, differ = 0;
+  for (int j = 0; j < one.height; ++j)
+    for (int i = 0; i < one.width; ++i) {
+      const float a = one.z.at(i, j), b = banded.z.at(i, j);
+      valid += !std::isnan(a);
+      differ += std::isnan(a) != std::isnan(b) || (!std::isnan(a) && a != b);
+    }
+  EXPECT_GT(valid, one.width * one.height / 2);
+  EXPECT_EQ(differ, 0);
+}
+
+// For each pipe of the scene, how many of the given Z-buffer cells lie within tol_mm of its surface.
+std::vector<int> pipe_votes(const Locator& loc, const SimulatedScene& s, const int* cells, int n,
+                            float tol_mm) {
+  std::vector<int> votes(s.model_to_world.size(), 0);
+  const ZBuffer& zb = loc.zbuffer();
+  for (int k = 0; k < n; ++k) {
+    const Eigen::Vector3d pt = zb.point(cells[k] % zb.z.width, cells[k] / zb.z.width).cast<double>();
+    for (std::size_t g = 0; g < votes.size(); ++g) {
+      const Eigen::Vector3f q = (s.model_to_world[g].inverse() * pt).cast<float>();
+      const LocatorModel::Sample* smp = loc.locator_model().nearest_sample(q);
+      votes[g] += smp && (smp->p - q).norm() < tol_mm;
+    }
+  }
+  return votes;
+}
+
+// The pipe most of the cells voted for.
+std::size_t most_voted(const std::vector<int>& votes) {
+  return std::size_t(std::max_element(votes.begin(), votes.end()) - votes.begin());
+}
+
+TEST(Segmentation, CandidateCoresLieOnTopPipes) {
+  const PipeModel& model = preset_model("u");
+  const SimulatedScene s = pile_of(model, 12, 21);
+  LocateConfig cfg;
+  Locator loc(model, cfg, s.camera.intrinsics);
+  loc.locate(s.depth_mm, s.camera);
+  const auto& rb = loc.regions();
+  ASSERT_GE(rb.candidates.size(), 1u);
+  // Each core cell is attributed to the pipe whose surface it lies on; a candidate's core must be
+  // mostly one pipe, and that pipe little covered by others.
+  int on_top = 0;
+  for (const auto& cand : rb.candidates) {
+    const std::vector<int> votes = pipe_votes(loc, s, &rb.core_cells[std::size_t(cand.core_begin)],
+                                              cand.core_end - cand.core_begin, 3.0f);
+    const std::size_t best = most_voted(votes);
+    const int core = cand.core_end - cand.core_begin;
+    EXPECT_GT(votes[best], core * 7 / 10);
+    on_top += s.info[best].occ_by_pipes <= 0.15;
+  }
+  EXPECT_GE(on_top * 10, int(rb.candidates.size()) * 7);
+}
+
+// A pipe whose top strip falls into several cores grows several regions; one lying mostly in an
+// earlier candidate's region is not tried again. Over simulated piles, each candidate region is
+// attributed to the pipe most of its cells lie on: the rule must leave fewer pipes tried twice and
+// every pipe tried that was tried without it.
+TEST(Segmentation, APipeBrokenIntoPiecesIsTriedOnce) {
+  const PipeModel& model = preset_model("sbend");
+  LocateConfig loose;
+  loose.region_max_claimed_share = 1;  // every region grown is a candidate
+  const LocateConfig cfg;
+  int repeats_loose = 0, repeats = 0, pipes_loose = 0, pipes = 0, lost = 0;
+  for (unsigned seed = 40; seed < 44; ++seed) {
+    const SimulatedScene s = pile_of(model, 14, seed);
+    const auto tried = [&](const LocateConfig& c) {
+      Locator loc(model, c, s.camera.intrinsics);
+      loc.locate(s.depth_mm, s.camera);
+      const auto& rb = loc.regions();
+      std::vector<int> per_pipe(s.model_to_world.size(), 0);
+      for (const auto& cand : rb.candidates) {
+        const std::vector<int> votes = pipe_votes(loc, s, &rb.region_cells[std::size_t(cand.cells_begin)],
+                                                  cand.cells_end - cand.cells_begin, 3.0f);
+        ++per_pipe[most_voted(votes)];
+      }
+      return per_pipe;
+    };
+    const std::vector<int> a = tried(loose), b = tried(cfg);
+    for (std::size_t g = 0; g < a.size(); ++g) {
+      repeats_loose += std::max(0, a[g] - 1), repeats += std::max(0, b[g] - 1);
+      pipes_loose += a[g] > 0, pipes += b[g] > 0, lost += a[g] > 0 && b[g] == 0;
+    }
+  }
+  std::printf("pipes tried %d / %d, extra tries of a pipe %d / %d (every region / the rule), lost %d\n",
+              pipes_loose, pipes, repeats_loose, repeats, lost);
+  EXPECT_GT(repeats_loose, 0) << "the piles should hold pipes whose strip falls into pieces";
+  EXPECT_LT(repeats, repeats_loose);
+  EXPECT_EQ(lost, 0);
+}
+
+// Beyond the paper: two straight pipes lying side by side on the floor, touching, one half a
+// length along the other, seen through the sensor model. Plane fits straddling the V between them
+// give upward normals, so the paper's cores join the two tops into one core too long to be a pipe,
+// and neither is tried. Split along the valley, each pipe gets a core of its own in some frames
+// (the valley is not always found whole), and no piece of the floor becomes a candidate.
+TEST(Segmentation, TouchingPipesSideBySideGetACoreEach) {
+  PipeSpec spec;
+  spec.diameter_mm = 20;
+  spec.segments = parse_centreline("S200");
+  const PipeModel model = derive_pipe_model(make_pipe(spec), "straight");
+  const double r = 10;
+  const Eigen::Matrix3d axes = principal_axes(model.surface.points, model.centroid);
+  Eigen::Matrix3d to_world;  // the model's long axis along world X
+  to_world.row(0) = axes.col(2).transpose();
+  to_world.row(1) = axes.col(1).transpose();
+  to_world.row(2) = to_world.row(0).cross(to_world.row(1));
+  const auto lying_at = [&](double x, double y) {
+    Pose p = Pose::Identity();
+    p.linear() = to_world;
+    p.translation() = Eigen::Vector3d(x, y, r + 0.5) - to_world * model.centroid.cast<double>();
+    return p;
+  };
+  // Over several frames (camera placement and sensor noise drawn anew): in how many does each of
+  // the two pipes get a candidate whose core lies mostly on it.
+  LocateConfig paper;
+  paper.core_valley_turn = 0;  // the paper's cores
+  const LocateConfig cfg;
+  constexpr int kFrames = 8;
+  int both_paper = 0, both_split = 0, off_pipe = 0;
+  for (int frame = 0; frame < kFrames; ++frame) {
+    std::mt19937 rng(unsigned(100 + frame));
+    SceneParams params;
+    const SimulatedScene s =
+        render_scene(model, {lying_at(-50, -r - 0.1), lying_at(50, r + 0.1)}, params, rng);
+    const auto pipes_with_a_core = [&](const LocateConfig& c) {
+      Locator loc(model, c, s.camera.intrinsics);
+      loc.locate(s.depth_mm, s.camera);
+      const auto& rb = loc.regions();
+      bool on[2] = {false, false};
+      for (const auto& cand : rb.candidates) {
+        const std::vector<int> votes = pipe_votes(loc, s, &rb.core_cells[std::size_t(cand.core_begin)],
+                                                  cand.core_end - cand.core_begin, 3.0f);
+        const std::size_t best = most_voted(votes);
+        if (votes[best] > (cand.core_end - cand.core_begin) * 7 / 10)
+          on[best] = true;
+        else
+          ++off_pipe;
+      }
+      return int(on[0]) + int(on[1]);
+    };
+    both_paper += pipes_with_a_core(paper) == 2;
+    both_split += pipes_with_a_core(cfg) == 2;
+  }
+  std::printf("frames with a core on each pipe: paper %d of %d, split %d of %d\n", both_paper, kFrames,
+              both_split, kFrames);
+  // Measured: the paper 0 of 8, split 4 of 8.
+  EXPECT_LE(both_paper, kFrames / 4) << "the two tops should mostly join into a core too long";
+  EXPECT_GE(both_split, both_paper + kFrames / 4);
+  EXPECT_EQ(off_pipe, 0) << "a candidate core not on a pipe (the floor split into pieces)";
+}
+
+// Beyond the paper: growth held to about a diameter from the core keeps a region on its pipe; the
+// paper's unlimited growth runs on over touching pipes, and such a region is dropped or mixed.
+// Measured on piles: how many candidate regions, and the share of a region's cells that lie on the
+// pipe most of them lie on.
+double mean_region_purity(const PipeModel& model, const SimulatedScene& s, const LocateConfig& cfg,
+                          int* regions) {
+  Locator loc(model, cfg, s.camera.intrinsics);
+  loc.locate(s.depth_mm, s.camera);
+  const auto& rb = loc.regions();
+  double sum = 0;
+  for (const auto& cand : rb.candidates) {
+    const std::vector<int> votes = pipe_votes(loc, s, &rb.region_cells[std::size_t(cand.cells_begin)],
+                                              cand.cells_end - cand.cells_begin, 6.0f);
+    sum += double(*std::max_element(votes.begin(), votes.end())) / double(cand.cells_end - cand.cells_begin);
+  }
+  *regions = int(rb.candidates.size());
+  return rb.candidates.empty() ? 0 : sum / double(rb.candidates.size());
+}
+
+TEST(Segmentation, HeldGrowthKeepsRegionsOnTheirPipe) {
+  const PipeModel& model = preset_model("sbend");
+  LocateConfig held, unlimited;
+  unlimited.region_max_reach_of_d = 100;
+  double p_held = 0, p_unlimited = 0;
+  int n_held = 0, n_unlimited = 0;
+  for (const unsigned seed : {6u, 7u, 8u}) {
+    const SimulatedScene s = pile_of(model, 20, seed);
+    int h = 0, u = 0;
+    p_held += mean_region_purity(model, s, held, &h) / 3;
+    p_unlimited += mean_region_purity(model, s, unlimited, &u) / 3;
+    n_held += h, n_unlimited += u;
+  }
+  // Measured: 25 regions of purity 0.80 held, against 20 of 0.77 unlimited (regions that spread
+  // over touching pipes are dropped as leaks). Cells within 6 mm of a pipe's surface count as on
+  // it; the rest are the sensor's noise, the floor and the pipe beneath.
+  ASSERT_GE(n_held, 9);
+  EXPECT_GT(p_held, 0.7);
+  EXPECT_GE(p_held, p_unlimited);
+  EXPECT_GT(n_held, n_unlimited);
+}
+
+}  // namespace
+}  // namespace pipeloc
