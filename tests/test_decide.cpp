@@ -16,6 +16,17 @@ Verification seen(int agree_px, int free_space_px, int occluded_px) {
 
 constexpr float kD = 20;  // tube diameter (mm): R_th = 0.35 * 20 = 7 mm at the default config
 
+// The same with its sides read: `level` of `side_px` side pixels lie at the silhouette's depth.
+Verification with_sides(Verification v, int side_px, int level) {
+  v.side_px = side_px, v.side_level_px = level;
+  return v;
+}
+
+Verification below_floor(Verification v, float share) {
+  v.below_floor = share;
+  return v;
+}
+
 Evidence after_ridge(int ridge_points) {
   Evidence e;
   e.tube_d_mm = kD;
@@ -69,6 +80,10 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
        0},
       {"free space over 0.05", judged(seen(900, 51, 0)), true, CandidateOutcome::not_confirmed, false, false,
        0},
+      {"sides level: a smooth blob", judged(with_sides(seen(900, 0, 0), 100, 61)), true,
+       CandidateOutcome::not_confirmed, false, false, 0},
+      {"a third under the floor", judged(below_floor(seen(900, 0, 0), 0.31f)), true,
+       CandidateOutcome::not_confirmed, false, false, 0},
       {"nothing judged",
        [] {
          Evidence e = judged(Verification{});
@@ -79,6 +94,12 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
       // Accepted: score = agreement * (1 - occluded), halved when ambiguous.
       {"accepted and pickable", judged(seen(900, 10, 100)), true, CandidateOutcome::accepted, false, true,
        0.81f},
+      {"sides drop away", judged(with_sides(seen(900, 0, 0), 100, 59)), true,
+       CandidateOutcome::accepted, false, true, 0.9f},
+      {"too few side pixels to judge", judged(with_sides(seen(900, 0, 0), kMinSidePx - 1, kMinSidePx - 1)),
+       true, CandidateOutcome::accepted, false, true, 0.9f},
+      {"resting on the floor", judged(below_floor(seen(900, 0, 0), 0.29f)), true, CandidateOutcome::accepted,
+       false, true, 0.9f},
       {"accepted under another pipe", judged(seen(800, 0, 200)), true, CandidateOutcome::accepted, false,
        false, 0.64f},
       {"rival about as good: ambiguous", judged_with_rival(seen(900, 0, 0), seen(860, 0, 0)), true,

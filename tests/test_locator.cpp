@@ -39,7 +39,7 @@ TEST(Locator, EndToEndPickIsATopPipe) {
 TEST(Locator, NoPickablePoseIsTheTwinOfANearSymmetricPipe) {
   PipeSpec spec;
   spec.diameter_mm = 16;
-  spec.segments = parse_centreline("S30,B120r45t90,B90r45,S30");
+  spec.segments = parse_centreline("S30,B120r45t90,B90r45t90,S30");
   const PipeModel model = derive_pipe_model(make_pipe(spec), "coil");
   ASSERT_EQ(model.near_symmetries.size(), 1u);
   const Pose& twin = model.near_symmetries[0];

@@ -86,12 +86,70 @@ TEST(PipeModel, SymmetricUWithEqualLegsIsFound) {
   EXPECT_GE(m.symmetries.size(), 1u);  // the half-turn about the U's axis of symmetry
 }
 
+// A negative bend angle turns towards the other side (an S), not back along the path.
+TEST(MakePipe, NegativeBendTurnsTheOtherWay) {
+  PipeSpec spec;
+  spec.diameter_mm = 10;
+  spec.segments = parse_centreline("S50,B90r30,B-90r30,S50");
+  const Mesh mesh = make_pipe(spec);
+  Eigen::Vector3f lo = mesh.vertices[0], hi = mesh.vertices[0];
+  for (const auto& v : mesh.vertices) lo = lo.cwiseMin(v), hi = hi.cwiseMax(v);
+  // Along x: 50 + 30 + 30 + 50; across: the two bends' radii; the tube's radius around that.
+  EXPECT_NEAR(lo.x(), 0, 0.01);
+  EXPECT_NEAR(hi.x(), 160, 0.01);
+  EXPECT_NEAR(lo.y(), -5, 0.01);
+  EXPECT_NEAR(hi.y(), 65, 0.01);
+}
+
+// A twisted bend turns the tube's frame, not its wall: ring vertices stay side by side, so no
+// face cuts across the inside of the tube (which would add area and samples inside it).
+TEST(MakePipe, TwistKeepsTheWallWhole) {
+  PipeSpec twisted, turned;
+  twisted.diameter_mm = turned.diameter_mm = 10;
+  twisted.segments = parse_centreline("S60,B90r30,B90r30t180,S60");
+  turned.segments = parse_centreline("S60,B90r30,B-90r30,S60");  // the same tube
+  EXPECT_NEAR(make_pipe(twisted).surface_area(), make_pipe(turned).surface_area(), 1e-3 * make_pipe(turned).surface_area());
+}
+
+// Exact symmetries are found on thin tubes as on thick ones, and whatever the mesh's resolution:
+// the tolerance follows the tube and the samples' spacing, and the half-turn is refined point to
+// plane until it lands (a leg mapped onto another slides into place).
+TEST(PipeModel, ExactSymmetriesWhateverTheTubeAndTheMesh) {
+  struct Case {
+    const char* path;
+    double diameter_mm;
+    std::size_t symmetries;
+  };
+  const Case cases[] = {
+      {"S60,B90r30,B-90r30,S60", 10, 1},  // S with equal legs: the half-turn about its plane's normal
+      {"S50,B120r40,S50", 12, 1},         // line-arc-line
+      {"S60,B180r40,S60", 8, 1},          // U with equal legs
+      {"S40,B60r50,S50,B-60r50,S40", 25, 1},
+      {"S60,B90r30,B90r30t180,S60", 10, 1},    // the same S, its second bend twisted round
+      {"S30,B120r45t90,B90r45t90,S30", 16, 0},  // a coil: near-symmetric only
+      {"S120,B160r35,S20", 14, 0},           // a hook
+  };
+  for (const Case& c : cases)
+    for (const int sides : {12, 64})
+      for (const double step_deg : {2.0, 10.0}) {
+        PipeSpec spec;
+        spec.diameter_mm = c.diameter_mm;
+        spec.segments = parse_centreline(c.path);
+        spec.sides = sides;
+        spec.bend_step_deg = step_deg;
+        const PipeModel m = derive_pipe_model(make_pipe(spec), c.path);
+        EXPECT_EQ(m.symmetries.size(), c.symmetries) << c.path << " sides " << sides << " step " << step_deg;
+        for (const Pose& s : m.symmetries)
+          EXPECT_NEAR(rotation_angle_deg(Eigen::Matrix3d::Identity(), s.linear()), 180.0, 1.0) << c.path;
+      }
+}
+
 // A pipe whose half-turn swaps its ends and lands its surface on itself within D/4 (but not within
 // the symmetry tolerance) has a near symmetry; a pipe with an exact symmetry or none has none.
 TEST(PipeModel, NearSymmetriesAreHalfTurnsMappingMostOfTheSurfaceOntoItself) {
   PipeSpec coil_spec;
   coil_spec.diameter_mm = 16;
-  coil_spec.segments = parse_centreline("S30,B120r45t90,B90r45,S30");
+  coil_spec.segments = parse_centreline("S30,B120r45t90,B90r45t90,S30");
   const PipeModel coil = derive_pipe_model(make_pipe(coil_spec), "coil");
   EXPECT_TRUE(coil.symmetries.empty());
   ASSERT_EQ(coil.near_symmetries.size(), 1u);

@@ -28,9 +28,10 @@ TEST(ZBufferBuild, RowBandsOnThreadsGiveTheSameBufferAsOneBand) {
   HoleList holes;
   holes.reserve(one);
   EXPECT_GT(build_zbuffer(s.depth_mm, s.camera.intrinsics, bin_to_camera(s.camera), &pts, &one), 0);
-  const int passes = int(std::lround(cfg.hole_fill_mm / 2 / cfg.zbuffer_pixel_mm));
+  const LocateConfig& used = loc.config();  // the derived thresholds in effect for that frame
+  const int passes = int(std::lround(used.hole_fill_mm / 2 / used.zbuffer_pixel_mm));
   ASSERT_GT(passes, 0);
-  fill_small_holes(&one, passes, float(cfg.continuity_step_max_mm), &holes);
+  fill_small_holes(&one, passes, float(used.continuity_step_max_mm), &holes);
   const ZBuffer& banded = loc.zbuffer();
   ASSERT_EQ(one.width, banded.width);
   ASSERT_EQ(one.height, banded.height);

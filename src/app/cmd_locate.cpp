@@ -40,6 +40,7 @@ Json estimate_json(const PipeEstimate& e, int rank, bool pick) {
           {"agreement", e.check.agreement()},
           {"free_space", e.check.free_space()},
           {"occluded", e.check.occluded()},
+          {"side_level", e.check.side_level()},
           {"model_px", e.check.model_px}};
 }
 
@@ -99,7 +100,8 @@ void add_locate(CLI::App& app) {
                           {"refined_t_mm", translation_mm(tr.refined_to_cam)},
                           {"agreement", tr.check.agreement()},
                           {"free_space", tr.check.free_space()},
-                          {"occluded", tr.check.occluded()}}
+                          {"occluded", tr.check.occluded()},
+                          {"side_level", tr.check.side_level()}}
                          .dump()
                   << '\n';
       }
@@ -112,6 +114,11 @@ void add_locate(CLI::App& app) {
         out.regions.claimed, out.regions.overlapping, out.times.total_ms,
         pick >= 0 ? "rank " + std::to_string(pick) : std::string("none"));
     const StageTimes& st = out.times;
+    spdlog::info("depth noise {:.2f} mm (1 sigma, measured) at a median depth of {:.0f} mm: continuity step {:.1f} mm, "
+                 "verify tolerance {:.1f} mm, refine inliers {:.1f} mm, normal window {:.1f} mm",
+                 out.noise.sigma_mm, out.noise.depth_mm, locator.config().continuity_step_max_mm,
+                 locator.config().verify_tolerance_mm, locator.config().refine_inlier_mm,
+                 locator.config().normal_window_mm);
     spdlog::info(
         "stages ms: zbuffer {:.1f} normals {:.1f} regions {:.1f} axis {:.1f} ridge_icp {:.1f} refine {:.1f} "
         "verify {:.1f}",
@@ -120,9 +127,9 @@ void add_locate(CLI::App& app) {
       const CandidateTrace& tr = out.traces[c];
       spdlog::info(
           "candidate {}: {} (ridge points {}, ridge residual {:.2f} mm, axis sections {}, agreement {:.2f}, "
-          "free space {:.2f}, occluded {:.2f})",
+          "free space {:.2f}, occluded {:.2f}, sides level {:.2f})",
           c, outcome_name(tr.outcome), tr.ridge_count, tr.ridge_cost_mm, tr.axis.best_count,
-          tr.check.agreement(), tr.check.free_space(), tr.check.occluded());
+          tr.check.agreement(), tr.check.free_space(), tr.check.occluded(), tr.check.side_level());
     }
     if (!opt->overlay.empty()) {
       write_rgb_png(opt->overlay, draw_locate_overlay(locator, depth, sized));

@@ -150,12 +150,12 @@ class Section {
 void read_locate(Section& s, LocateConfig* c) {
   s.real("zbuffer_pixel_mm", &c->zbuffer_pixel_mm, 0.25, 10, "mm");
   s.real("zbuffer_max_side_mm", &c->zbuffer_max_side_mm, 100, 5000, "mm");
-  s.real("hole_fill_mm", &c->hole_fill_mm, 0, 50, "mm");
-  s.real("normal_window_mm", &c->normal_window_mm, 1, 50, "mm");
+  s.real("hole_fill_mm", &c->hole_fill_mm, 0, 50, "mm (0: derived)");
+  s.real("normal_window_mm", &c->normal_window_mm, 0, 50, "mm (0: derived)");
   s.real("normal_min_valid_share", &c->normal_min_valid_share, 0.05, 1, "share");
   s.real("upward_normal_max_deg", &c->upward_normal_max_deg, 1, 89, "deg");
   s.real("continuity_max_deg", &c->continuity_max_deg, 1, 89, "deg");
-  s.real("continuity_step_max_mm", &c->continuity_step_max_mm, 0.1, 100, "mm");
+  s.real("continuity_step_max_mm", &c->continuity_step_max_mm, 0, 100, "mm (0: derived)");
   s.real("core_min_area_of_d2", &c->core_min_area_of_d2, 0, 100, "x D^2");
   s.real("core_max_extent_of_l", &c->core_max_extent_of_l, 0.1, 10, "x L");
   s.real("core_valley_turn", &c->core_valley_turn, 0, 2, "difference of unit-normal components");
@@ -181,12 +181,14 @@ void read_locate(Section& s, LocateConfig* c) {
   s.real("icp_converged_mm", &c->icp_converged_mm, 0.001, 10, "mm");
   s.real("residual_max_of_d", &c->residual_max_of_d, 0.01, 5, "x D");
   s.integer("refine_iterations", &c->refine_iterations, 0, 200, "iterations");
-  s.real("refine_inlier_mm", &c->refine_inlier_mm, 0.5, 50, "mm");
+  s.real("refine_inlier_mm", &c->refine_inlier_mm, 0, 50, "mm (0: derived)");
   s.integer("refine_max_points", &c->refine_max_points, 50, 100000, "points");
-  s.real("verify_tolerance_mm", &c->verify_tolerance_mm, 0.5, 100, "mm");
+  s.real("verify_tolerance_mm", &c->verify_tolerance_mm, 0, 100, "mm (0: derived)");
   s.real("verify_min_agreement", &c->verify_min_agreement, 0, 1, "share");
   s.real("verify_max_free_space", &c->verify_max_free_space, 0, 1, "share");
   s.real("verify_max_occluded", &c->verify_max_occluded, 0, 1, "share");
+  s.real("side_drop_of_d", &c->side_drop_of_d, 0, 5, "x D");
+  s.real("verify_max_side_level", &c->verify_max_side_level, 0, 1, "share (1: off)");
   s.real("ambiguity_pose_mm", &c->ambiguity_pose_mm, 0, 1000, "mm");
   s.real("ambiguity_quality_margin", &c->ambiguity_quality_margin, 0, 1, "share");
   s.integer("verify_hypotheses", &c->verify_hypotheses, 1, 24, "fits per region");

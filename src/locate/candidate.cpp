@@ -47,6 +47,15 @@ constexpr Check kChecks[] = {
      [](const Evidence& e, const LocateConfig& cfg) {
        return !(e.best.free_space() > float(cfg.verify_max_free_space));
      }},
+    // Beyond the paper: a smooth blob fits a pipe's top as well as a pipe does, but a pipe's sides
+    // drop away from it (too few side pixels say nothing: a pipe among shadows).
+    {CandidateStage::hypotheses, CandidateOutcome::not_confirmed,
+     [](const Evidence& e, const LocateConfig& cfg) {
+       return e.best.side_px < kMinSidePx || !(e.best.side_level() > float(cfg.verify_max_side_level));
+     }},
+    // ... and no pipe lies under the floor.
+    {CandidateStage::hypotheses, CandidateOutcome::not_confirmed,
+     [](const Evidence& e, const LocateConfig&) { return !(e.best.below_floor > kMaxShareBelowFloor); }},
 };
 
 }  // namespace
@@ -249,7 +258,11 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
     e.model_to_bin = refined.pose;
     e.model_to_cam = ctx.bin_to_cam * refined.pose;
     e.check = verify_pose(lm.verify_mesh, lm.verify_winding, e.model_to_cam, ctx.depth, ctx.camera,
-                          float(cfg.verify_tolerance_mm), &buf->scratch_depth, &buf->scratch_mesh);
+                          float(cfg.verify_tolerance_mm), float(cfg.side_drop_of_d) * lm.tube_d_mm,
+                          &buf->scratch_depth, &buf->scratch_mesh);
+    if (!std::isnan(ctx.lowest_surface_z_mm))
+      e.check.below_floor = share_below(lm.verify_mesh, e.model_to_bin,
+                                        ctx.lowest_surface_z_mm - kBelowFloorOfD * lm.tube_d_mm);
     buf->times.verify_ms += ms_since(t0);
     e.ridge_cost_mm = ridge_cost_mm;
     e.ridge_points = observed.count;

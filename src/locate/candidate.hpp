@@ -5,6 +5,8 @@
 // outcome.
 #pragma once
 
+#include <cmath>
+
 #include <atomic>
 #include <vector>
 
@@ -114,6 +116,7 @@ struct CandidateContext {
   const Image<float>& depth;
   const Intrinsics& camera;
   Pose bin_to_cam;
+  float lowest_surface_z_mm = NAN;  // bin frame: the floor where it is seen (LocateOutput)
 };
 
 struct CandidateTimes {

@@ -9,8 +9,13 @@ struct LocateConfig {
   // II-A: Z-buffer and normals.
   double zbuffer_pixel_mm = 1.0;        // the paper's 1 mm cells
   double zbuffer_max_side_mm = 1600;    // the Z-buffer covers at most this square of the bin
-  double hole_fill_mm = 8.0;            // glint holes up to this wide are filled (about D/2)
-  double normal_window_mm = 7.0;        // plane-fit neighbourhood (about D/3: the pipe stays locally plane)
+  // A length in mm left at 0 is derived (locate/thresholds.cpp): hole fill and normal window from
+  // D, the noise-dependent three from the depth noise measured in each frame. The defaults are the
+  // fixed values: derived, they cost recall on the zoo and the dev set (docs/experiments.md,
+  // "Thresholds"), so deriving them is a choice for a sensor far from the Kinect class at 1 m.
+  double hole_fill_mm = 8.0;      // glint holes up to this wide are filled (0: 0.44 D; under 2 cells: none)
+  double normal_window_mm = 7.0;  // plane-fit neighbourhood (0: 0.35 D, the part of the tube that is
+                                  // locally plane, and at least 2.5 pixel footprints)
   double normal_min_valid_share = 0.4;  // of the window's cells; fewer and the cell has no normal
 
   // II-B, Algorithm 1: candidate regions.
@@ -18,8 +23,8 @@ struct LocateConfig {
       45;  // core cells: N . Nv > cos(this) (N_th1); pipes resting on others tilt this far
   double continuity_max_deg =
       35;  // growth: N_i . N_j > cos(this); 3 sigma of two 7 mm plane fits plus the turn per cell
-  double continuity_step_max_mm =
-      8;  // growth: no jump between neighbours (3 sigma of the difference of two noisy cells at 1.1 m)
+  double continuity_step_max_mm = 8;  // growth: no jump between neighbours (3.4 sigma of a Kinect-class
+                                      // sensor's noise at 1.1 m; 0: 3.4 sigma of the frame's measured noise)
   double core_min_area_of_d2 = 0.75;    // A_th = this * D^2
   double core_max_extent_of_l = 1.15;   // a core longer than the pipe is not one pipe (bin rims, floor)
   double core_valley_turn = 0.5;        // ... unless it splits where the normals D/4 either side turn
@@ -57,11 +62,15 @@ struct LocateConfig {
   // Beyond the paper: surface refinement, verification, ambiguity.
   int refine_iterations = 12;
   int refine_max_points = 1500;            // observed points used by the refinement
-  double refine_inlier_mm = 4;             // point-to-plane pairs farther than this are not the pipe
-  double verify_tolerance_mm = 7;          // about 3 sigma of axial noise at 1.1 m plus a disparity step
+  double refine_inlier_mm = 4;     // point-to-plane pairs farther than this are not the pipe
+                                   // (0: 1.7 sigma of the frame's measured noise, at least 0.2 D)
+  double verify_tolerance_mm = 7;  // depth agreement, 3 sigma of a Kinect-class sensor's noise at 1.1 m
+                                   // (0: 3 sigma of the frame's measured noise, at least 2.5 mm)
   double verify_min_agreement = 0.7;       // share of the model's visible pixels the sensor confirms
   double verify_max_free_space = 0.05;     // share of model pixels where the sensor saw through it
   double verify_max_occluded = 0.15;       // share of model pixels covered by something in front
+  double side_drop_of_d = 0.25;            // a pipe's surroundings lie at least this * D beyond its silhouette ...
+  double verify_max_side_level = 0.6;      // ... but for at most this share (more: a smooth blob, not a pipe)
   int verify_hypotheses = 3;               // distinct ridge fits refined and checked per region
   double ambiguity_pose_mm = 10;           // two fits further apart than this (MSSD) ...
   double ambiguity_quality_margin = 0.05;  // ... both confirmed within this margin: ambiguous

@@ -6,16 +6,19 @@
 namespace pipeloc {
 Locator::Locator(const PipeModel& model, const LocateConfig& cfg, const Intrinsics& camera)
     : model_(model),
-      cfg_(cfg),
+      user_cfg_(cfg),
+      cfg_(with_model_thresholds(cfg, model.tube_diameter_mm)),
       workers_(std::size_t(std::max(1, cfg.threads))),
       pool_(std::max(1, cfg.threads)) {
-  lm_ = prepare_locator_model(model, float(cfg.refine_inlier_mm) + 4.0f, cfg);
+  lm_ = prepare_locator_model(model, max_refine_inlier_mm(cfg, model.tube_diameter_mm) + 4.0f, cfg);
   starts_ = prepare_starts(lm_, cfg);
   reserve_zbuffer(&zb_, cfg.zbuffer_max_side_mm, cfg.zbuffer_pixel_mm);
   camera_width_ = camera.width, camera_height_ = camera.height;
   reserve_zbuffer_points(&zb_points_, camera.width, camera.height, pool_.size());
   reserve_normals(&nm_, zb_, pool_.size());
   holes_.reserve(zb_);
+  constexpr int kHeightBinsMm = 8192;  // heights over 8 m in one frame are not a bin
+  height_histogram_.assign(std::size_t(kHeightBinsMm), 0);
   band_holes_.assign(std::size_t(pool_.size()), 0);
   reserve_regions(&rb_, zb_, cfg, lm_.tube_d_mm, lm_.extent_l_mm);
 
@@ -44,6 +47,9 @@ const LocateOutput& Locator::locate(const Image<float>& depth, const CameraInfo&
   out_.budget_exhausted = false;
   out_.regions = {};
   const Pose bin_to_cam = bin_to_camera(camera);
+  // The thresholds that follow the sensor: its noise and pixel footprint, measured in this frame.
+  out_.noise = measure_depth_noise(depth, &noise_histograms_);
+  set_frame_thresholds(user_cfg_, model_.tube_diameter_mm, out_.noise, camera.intrinsics, &cfg_);
   // Anytime: what is not expected to finish before the deadline is not started. The expected
   // durations are running averages of earlier cycles (none yet: everything is tried).
   if (deadline != Clock::time_point::max() && t_start + ms_duration(serial_ms_avg_) > deadline) {
@@ -54,6 +60,10 @@ const LocateOutput& Locator::locate(const Image<float>& depth, const CameraInfo&
 
   auto t = Clock::now();
   build_zbuffer_banded(depth, camera, bin_to_cam);
+  // The floor: the height only 2 % of the visible surface lies under (noise takes the lowest cells
+  // of a seen floor a little deeper, which errs on the side of keeping a pose).
+  constexpr float kLowestSurfaceShare = 0.02f;
+  out_.lowest_surface_z_mm = lowest_surface_z(zb_, kLowestSurfaceShare, &height_histogram_);
   out_.times.zbuffer_ms = ms_since(t);
 
   t = Clock::now();
@@ -223,7 +233,8 @@ void Locator::merge_estimate(int c) {
 }
 
 void Locator::work_candidate(int c, Worker& wk, const Frame& f) {
-  const CandidateContext ctx{model_, lm_, starts_, cfg_, zb_, *f.depth, f.camera->intrinsics, f.bin_to_cam};
+  const CandidateContext ctx{model_, lm_,           starts_,    cfg_, zb_, *f.depth, f.camera->intrinsics,
+                             f.bin_to_cam, out_.lowest_surface_z_mm};
   CandidateInput in;
   in.index = c;
   in.region = &rb_.candidates[std::size_t(c)];

@@ -11,6 +11,7 @@
 #include "core/clock.hpp"
 #include "core/worker_pool.hpp"
 #include "locate/candidate.hpp"
+#include "locate/thresholds.hpp"
 
 namespace pipeloc {
 
@@ -25,6 +26,8 @@ struct LocateOutput {
   RegionStats regions;
   StageTimes times;
   int valid_pixels = 0;
+  DepthNoise noise;  // measured in the frame; the derived thresholds follow it
+  float lowest_surface_z_mm = 0;  // bin frame: the floor where it is seen (no pose lies below it)
   bool budget_exhausted = false;
   int pick() const {
     for (std::size_t i = 0; i < estimates.size(); ++i)
@@ -51,7 +54,7 @@ class Locator {
   const std::vector<Eigen::Vector3f>& ridge_points() const { return ridge_pts_; }
   const LocatorModel& locator_model() const { return lm_; }
   const StartSet& starts() const { return starts_; }
-  const LocateConfig& config() const { return cfg_; }
+  const LocateConfig& config() const { return cfg_; }  // the thresholds in effect for the last frame
 
  private:
   // Per-thread working memory for candidates.
@@ -89,7 +92,10 @@ class Locator {
   }
 
   const PipeModel& model_;
-  LocateConfig cfg_;
+  LocateConfig user_cfg_;  // as configured: keys at 0 are derived (thresholds.hpp)
+  LocateConfig cfg_;       // in effect this frame
+  NoiseHistograms noise_histograms_;
+  std::vector<int> height_histogram_;  // 1 mm bins, for the lowest surface
   LocatorModel lm_;
   StartSet starts_;
   ZBuffer zb_;

@@ -1,20 +1,48 @@
 #include "locate/verify.hpp"
 
+#include <algorithm>
+#include <cmath>
+
 namespace pipeloc {
+namespace {
+
+// The sides are read this many pixels beyond the silhouette: the pixel next to it mixes pipe and
+// background (lateral noise).
+constexpr int kSideStepPx = 2;
+
+}  // namespace
 
 Verification verify_pose(const Mesh& mesh, Winding winding, const Pose& model_to_cam,
-                         const Image<float>& depth, const Intrinsics& k, float tol, Image<float>* scratch,
-                         ProjectedMesh* projected) {
+                         const Image<float>& depth, const Intrinsics& k, float tol, float side_drop_mm,
+                         Image<float>* scratch, ProjectedMesh* projected) {
   Verification v;
   const PixelBox box = render_depth_in_box(mesh, model_to_cam, k, scratch, projected, winding);
+  const auto model_at = [&](int x, int y) {
+    return x >= box.x0 && x <= box.x1 && y >= box.y0 && y <= box.y1 && scratch->at(x, y) > 0;
+  };
+  // A side pixel: beyond the rim at (x, y) in direction (dx, dy), not on the model.
+  const auto side = [&](int x, int y, int dx, int dy, float zm) {
+    const int xs = x + kSideStepPx * dx, ys = y + kSideStepPx * dy;
+    if (!depth.inside(xs, ys) || model_at(xs, ys)) return;
+    const float zo = depth.at(xs, ys);
+    if (!(zo > 0) || zo < zm - tol) return;  // no reading, or something in front: neither
+    ++v.side_px;
+    v.side_level_px += zo <= zm + side_drop_mm;
+  };
   for (int y = box.y0; y <= box.y1; ++y)
     for (int x = box.x0; x <= box.x1; ++x) {
       const float zm = scratch->at(x, y);
       if (zm <= 0) continue;
       // The silhouette's rim is left out: lateral noise mixes it with the background.
-      if (x == box.x0 || y == box.y0 || x == box.x1 || y == box.y1 || scratch->at(x - 1, y) <= 0 ||
-          scratch->at(x + 1, y) <= 0 || scratch->at(x, y - 1) <= 0 || scratch->at(x, y + 1) <= 0)
+      const bool left = model_at(x - 1, y), right = model_at(x + 1, y), up = model_at(x, y - 1),
+                 down = model_at(x, y + 1);
+      if (!left || !right || !up || !down) {
+        if (!left) side(x, y, -1, 0, zm);
+        if (!right) side(x, y, 1, 0, zm);
+        if (!up) side(x, y, 0, -1, zm);
+        if (!down) side(x, y, 0, 1, zm);
         continue;
+      }
       ++v.model_px;
       const float zo = depth.at(x, y);
       if (!(zo > 0)) continue;  // no reading: neither for nor against
@@ -26,6 +54,38 @@ Verification verify_pose(const Mesh& mesh, Winding winding, const Pose& model_to
         ++v.agree_px;
     }
   return v;
+}
+
+float lowest_surface_z(const ZBuffer& zb, float share, std::vector<int>* histogram) {
+  float lo = INFINITY, hi = -INFINITY;
+  int valid = 0;
+  for (int k = 0; k < zb.width * zb.height; ++k) {
+    const float z = zb.z.pixels[std::size_t(k)];
+    if (std::isnan(z)) continue;
+    lo = std::min(lo, z), hi = std::max(hi, z);
+    ++valid;
+  }
+  if (valid == 0 || histogram->empty()) return NAN;
+  std::fill(histogram->begin(), histogram->end(), 0);
+  const int bins = int(histogram->size());
+  for (int k = 0; k < zb.width * zb.height; ++k) {
+    const float z = zb.z.pixels[std::size_t(k)];
+    if (!std::isnan(z)) ++(*histogram)[std::size_t(std::min(bins - 1, int(z - lo)))];
+  }
+  const int wanted = std::max(1, int(share * float(valid)));
+  int seen = 0;
+  for (int b = 0; b < bins; ++b)
+    if ((seen += (*histogram)[std::size_t(b)]) >= wanted) return lo + float(b);
+  return hi;
+}
+
+float share_below(const Mesh& mesh, const Pose& model_to_bin, float z_mm) {
+  if (mesh.vertices.empty()) return 0;
+  int below = 0;
+  const Eigen::Matrix3f r = model_to_bin.linear().cast<float>();
+  const Eigen::Vector3f t = model_to_bin.translation().cast<float>();
+  for (const Eigen::Vector3f& v : mesh.vertices) below += (r * v + t).z() < z_mm;
+  return float(below) / float(mesh.vertices.size());
 }
 
 }  // namespace pipeloc

@@ -4,7 +4,11 @@
 
 #include "core/camera.hpp"
 #include "core/image.hpp"
+#include <vector>
+
+#include "core/pose.hpp"
 #include "locate/locate_config.hpp"
+#include "locate/zbuffer.hpp"
 #include "model/mesh.hpp"
 #include "render/raster.hpp"
 
@@ -18,12 +22,33 @@ struct Verification {
   float agreement() const { return model_px ? float(agree_px) / float(model_px) : 0.f; }
   float free_space() const { return model_px ? float(free_space_px) / float(model_px) : 1.f; }
   float occluded() const { return model_px ? float(occluded_px) / float(model_px) : 1.f; }
+  // Just beyond the silhouette: a pipe's sides drop away from it (to the pipes beneath or the
+  // floor); the surface of a smooth blob goes on at the silhouette's depth.
+  int side_px = 0;        // pixels a few steps outside the silhouette with a reading not in front
+  int side_level_px = 0;  // ... whose depth lies within the drop of the silhouette's
+  float side_level() const { return side_px ? float(side_level_px) / float(side_px) : 0.f; }
+  float below_floor = 0;  // share of the model more than kBelowFloorOfD * D under the lowest surface seen
 };
+
+// A pose is under the floor when more than this share of its model lies more than this * D below
+// the lowest surface seen (a third of a tube sunk to its axis); a blob when its sides do not drop
+// away (judged on at least this many side pixels).
+constexpr float kMaxShareBelowFloor = 0.3f, kBelowFloorOfD = 0.25f;
+constexpr int kMinSidePx = 20;
 
 // scratch: camera-sized image whose contents are overwritten in the model's box; projected:
 // reserved for the mesh. winding: of the mesh, if closed (its back faces are then not drawn).
+// side_drop_mm: how far beyond its silhouette a pipe's surroundings lie at least (a share of D).
 Verification verify_pose(const Mesh& mesh, Winding winding, const Pose& model_to_cam,
                          const Image<float>& depth_mm, const Intrinsics& k, float tolerance_mm,
-                         Image<float>* scratch, ProjectedMesh* projected);
+                         float side_drop_mm, Image<float>* scratch, ProjectedMesh* projected);
+
+// Beyond the paper: the bin. The lowest surface the frame shows (the floor where it is seen, else
+// the lowest pipes), as the height under which `share` of the Z-buffer's valid cells lie;
+// histogram: working memory (1 mm bins). NaN when the buffer is empty.
+float lowest_surface_z(const ZBuffer& zb, float share, std::vector<int>* histogram);
+
+// The share of the mesh's vertices that lie lower than z_mm in the bin frame.
+float share_below(const Mesh& mesh, const Pose& model_to_bin, float z_mm);
 
 }  // namespace pipeloc

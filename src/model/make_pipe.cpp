@@ -23,9 +23,11 @@ double parse_number(const std::string& token, const std::string& text, std::size
   return value;
 }
 
-void add_ring(Mesh* mesh, const Frame& f, double radius, int sides) {
+// phase: where vertex 0 lies from f.n: a twist of the frame turns it back by as much, so that
+// vertex k of one ring and of the next stay side by side (faces along the wall, not across it).
+void add_ring(Mesh* mesh, const Frame& f, double radius, int sides, double phase) {
   for (int k = 0; k < sides; ++k) {
-    const double a = 2.0 * M_PI * k / sides;
+    const double a = 2.0 * M_PI * k / sides + phase;
     const Eigen::Vector3d v = f.p + radius * (std::cos(a) * f.n + std::sin(a) * f.b);
     mesh->vertices.push_back(v.cast<float>());
   }
@@ -108,10 +110,11 @@ Mesh make_pipe(const PipeSpec& spec) {
   Mesh mesh;
   Frame f{Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitY(),
           Eigen::Vector3d::UnitZ()};
-  add_ring(&mesh, f, r, sides);
+  double phase = 0;
+  add_ring(&mesh, f, r, sides, phase);
   int rings = 1;
   auto extend = [&](const Frame& g) {
-    add_ring(&mesh, g, r, sides);
+    add_ring(&mesh, g, r, sides, phase);
     const int a0 = (rings - 1) * sides, b0 = rings * sides;
     for (int k = 0; k < sides; ++k) {
       const int k1 = (k + 1) % sides;
@@ -133,12 +136,15 @@ Mesh make_pipe(const PipeSpec& spec) {
     const Eigen::AngleAxisd twist(seg.twist_deg * kDegToRad, f.t);
     f.n = twist * f.n;
     f.b = twist * f.b;
-    const Eigen::Vector3d centre = f.p + seg.radius_mm * f.n;
-    const Eigen::Vector3d axis = f.t.cross(f.n);  // turning t towards n
+    phase -= seg.twist_deg * kDegToRad;
+    // A negative angle turns towards -n: the centre of the arc lies on that side.
+    const double side = seg.angle_deg < 0 ? -1.0 : 1.0;
+    const Eigen::Vector3d centre = f.p + side * seg.radius_mm * f.n;
+    const Eigen::Vector3d axis = side * f.t.cross(f.n);  // turning t towards side * n
     const int steps = std::max(1, int(std::ceil(std::abs(seg.angle_deg) / spec.bend_step_deg)));
     const Frame start = f;
     for (int s = 1; s <= steps; ++s) {
-      const Eigen::AngleAxisd rot(seg.angle_deg * kDegToRad * s / steps, axis);
+      const Eigen::AngleAxisd rot(std::abs(seg.angle_deg) * kDegToRad * s / steps, axis);
       f.p = centre + rot * (start.p - centre);
       f.t = rot * start.t;
       f.n = rot * start.n;

@@ -121,6 +121,11 @@ Pose half_turn(const Eigen::Vector3d& axis, const Eigen::Vector3f& centre) {
   return m;
 }
 
+// An exact symmetry lands this share of the samples on the surface (the rest: sharp edges).
+constexpr float kSymmetryMinShare = 0.99f;
+// Its refinement starts with pairs this many tolerances apart (12 x 0.08 D: about a diameter).
+constexpr float kSymmetryGateStartOfTolerance = 12, kSymmetryGateEndOfTolerance = 6;
+
 // What both half-turn searches start from: the surface's principal axes (the half-turns are
 // about them) and its samples indexed for closest points.
 struct IndexedSurface {
@@ -134,45 +139,122 @@ struct IndexedSurface {
 
 }  // namespace
 
+namespace {
+
+// A half-turn about a principal axis, refined on the part of the surface it maps onto itself:
+// pairs are gated from `gate_start_mm` down to `gate_end_mm`, so that parts that differ do not
+// pull and sampling noise in the principal axes (a degree or so) is taken out.
+Pose refine_half_turn(const SurfaceSamples& surface, const IndexedSurface& indexed, const Eigen::Vector3f& centroid,
+                      int axis, std::size_t stride, float gate_start_mm, float gate_end_mm) {
+  Pose m = half_turn(indexed.axes.col(axis), centroid);
+  const std::size_t n = (surface.points.size() + stride - 1) / stride;
+  float reach_mm = 0;  // the samples' farthest distance from the origin of the model frame
+  for (std::size_t i = 0; i < n; ++i) reach_mm = std::max(reach_mm, surface.points[i * stride].norm());
+  // Point-to-plane steps (the samples' normals): a leg mapped onto another slides into place in a
+  // few steps, where point-to-point pairs move it a little at a time. The gate narrows over the
+  // first iterations.
+  constexpr int kNarrowing = 6, kMaxIterations = 20;
+  constexpr double kConvergedMm = 0.002;
+  for (int iter = 0; iter < kMaxIterations; ++iter) {
+    const float t = std::min(1.0f, float(iter) / float(kNarrowing));
+    const float gate = gate_start_mm + (gate_end_mm - gate_start_mm) * t;
+    Eigen::Matrix<double, 6, 6> ata = Eigen::Matrix<double, 6, 6>::Zero();
+    Eigen::Matrix<double, 6, 1> atb = Eigen::Matrix<double, 6, 1>::Zero();
+    int pairs = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      const Eigen::Vector3d q = m * surface.points[i * stride].cast<double>();
+      int idx = 0;
+      float d2 = 0;
+      indexed.tree.nearest(q.cast<float>(), &idx, &d2, 64);
+      if (d2 > gate * gate) continue;
+      const Eigen::Vector3d s = surface.points[std::size_t(idx)].cast<double>();
+      const Eigen::Vector3d nrm = surface.normals[std::size_t(idx)].cast<double>();
+      Eigen::Matrix<double, 6, 1> row;
+      row << q.cross(nrm), nrm;
+      ata += row * row.transpose();
+      atb -= row * (q - s).dot(nrm);
+      ++pairs;
+    }
+    if (pairs < 10) break;
+    const Eigen::Matrix<double, 6, 1> x = ata.ldlt().solve(atb);
+    if (!x.allFinite()) break;
+    Pose step = Pose::Identity();
+    const double angle = x.head<3>().norm();
+    if (angle > 0) step.linear() = Eigen::AngleAxisd(angle, x.head<3>() / angle).toRotationMatrix();
+    step.translation() = x.tail<3>();
+    m = step * m;
+    m.linear() = nearest_rotation(m.linear());
+    // How far the step moved a sample at most: the turn times the part's reach, plus the shift.
+    const double moved = x.tail<3>().norm() + angle * double(reach_mm);
+    if (iter >= kNarrowing && moved < kConvergedMm) break;
+  }
+  return m;
+}
+
+// How far each sample lands from the surface under `m`: the least point-to-plane distance to the
+// samples around where it lands (one sample's plane is wrong at a sharp edge, e.g. an end cap's
+// rim, and the gap between samples is no departure from the surface). Returns the share of
+// samples within tolerance_mm and the largest distance to the nearest sample.
+struct LandingShare {
+  float within = 0;
+  float worst_gap_mm = 0;
+};
+LandingShare landing_share(const SurfaceSamples& surface, const IndexedSurface& indexed, const Pose& m,
+                           std::size_t stride, float tolerance_mm, float spacing_mm) {
+  constexpr int kAround = 8;
+  int idx[kAround];
+  float d2[kAround];
+  const float radius = tolerance_mm + 2 * spacing_mm;
+  const std::size_t n = (surface.points.size() + stride - 1) / stride;
+  int within = 0;
+  LandingShare out;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Eigen::Vector3f q = (m * surface.points[i * stride].cast<double>()).cast<float>();
+    int nearest = 0;
+    float nearest_d2 = 0;
+    indexed.tree.nearest(q, &nearest, &nearest_d2, 64);
+    out.worst_gap_mm = std::max(out.worst_gap_mm, std::sqrt(nearest_d2));
+    float best = std::abs((q - surface.points[std::size_t(nearest)]).dot(surface.normals[std::size_t(nearest)]));
+    const int found = indexed.tree.radius(q, radius, idx, d2, kAround);
+    for (int k = 0; k < found; ++k)
+      best = std::min(best, std::abs((q - surface.points[std::size_t(idx[k])]).dot(surface.normals[std::size_t(idx[k])])));
+    within += std::sqrt(nearest_d2) <= radius && best <= tolerance_mm;
+  }
+  out.within = float(within) / float(std::max<std::size_t>(1, n));
+  return out;
+}
+
+}  // namespace
+
 std::vector<Pose> find_symmetries(const SurfaceSamples& surface, const Eigen::Vector3f& centroid,
-                                  float tolerance_mm) {
+                                  float tolerance_mm, float spacing_mm) {
   // A rigid symmetry fixes the surface centroid and maps principal axes onto principal axes; with
   // distinct principal moments the only proper candidates are half-turns about each axis.
   std::vector<Pose> found;
   if (surface.points.size() < 10) return found;
   const IndexedSurface indexed(surface, centroid);
-  // Sampling noise tilts the principal axes by a degree or so: refine each candidate with a few
-  // closest-point iterations (Umeyama fit) before judging it.
   const std::size_t stride = std::max<std::size_t>(1, surface.points.size() / 3000);
-  Eigen::Matrix3Xd src(3, (surface.points.size() + stride - 1) / stride), dst(3, src.cols());
+  // The refinement starts a tube diameter wide (the tolerance is a share of it): the principal
+  // axes of a long thin part tilt by a degree with sampling noise, millimetres at its ends.
+  const float gate_start = kSymmetryGateStartOfTolerance * tolerance_mm + 2 * spacing_mm;
+  // ... and ends half as wide: the pairs of an exact symmetry all come close, and keeping the far
+  // ones (a leg's end a few mm off) pulls it in; a part that only nearly maps onto itself is
+  // pulled askew by them and fails the landing test below, as it should.
+  const float gate_end = kSymmetryGateEndOfTolerance * tolerance_mm + spacing_mm;
   for (int axis = 0; axis < 3; ++axis) {
-    Eigen::Matrix4f m = half_turn(indexed.axes.col(axis), centroid).matrix().cast<float>();
-    bool fits = true;
-    for (int iter = 0; iter <= 5 && fits; ++iter) {
-      float worst_plane = 0;
-      for (Eigen::Index c = 0; c < src.cols(); ++c) {
-        const Eigen::Vector3f& p = surface.points[std::size_t(c) * stride];
-        const Eigen::Vector3f q = m.topLeftCorner<3, 3>() * p + m.topRightCorner<3, 1>();
-        int idx = 0;
-        float d2 = 0;
-        indexed.tree.nearest(q, &idx, &d2, 64);
-        src.col(c) = p.cast<double>();
-        dst.col(c) = surface.points[idx].cast<double>();
-        // Point-to-plane: the gap between samples is not a departure from the surface.
-        worst_plane = std::max(worst_plane, std::abs((q - surface.points[idx]).dot(surface.normals[idx])));
-        if (d2 > 16 * tolerance_mm * tolerance_mm) fits = false;
-      }
-      if (iter == 5)
-        fits = fits && worst_plane <= tolerance_mm;
-      else if (fits)
-        m = Eigen::umeyama(src, dst, false).cast<float>();
-    }
-    if (!fits) continue;
-    Pose refined = Pose::Identity();
-    refined.matrix() = m.cast<double>();
+    const Pose m = refine_half_turn(surface, indexed, centroid, axis, stride, gate_start, gate_end);
+    // Every sample must land on the surface, but for the few at sharp edges (end caps' rims)
+    // where the samples' own planes are a mesh-discretisation artefact.
+    const LandingShare share = landing_share(surface, indexed, m, stride, tolerance_mm, spacing_mm);
+    if (share.within < kSymmetryMinShare || share.worst_gap_mm > tolerance_mm + 4 * spacing_mm) continue;
+    Pose refined = m;
     refined.linear() = nearest_rotation(refined.linear());
-    // A refinement that slid to the identity is not a symmetry.
-    if (rotation_angle_deg(Eigen::Matrix3d::Identity(), refined.linear()) > 90) found.push_back(refined);
+    // A refinement that slid to the identity is not a symmetry, nor one that slid to a symmetry
+    // already found (from another axis: the in-plane axes of a flat part can turn into each other).
+    if (rotation_angle_deg(Eigen::Matrix3d::Identity(), refined.linear()) <= 90) continue;
+    bool known = false;
+    for (const Pose& f : found) known = known || rotation_angle_deg(f.linear(), refined.linear()) < 10;
+    if (!known) found.push_back(refined);
   }
   return found;
 }
@@ -259,7 +341,9 @@ PipeModel derive_pipe_model(Mesh mesh, const std::string& source, const ModelDer
   if (!(model.tube_diameter_mm > 0) || model.tube_diameter_mm >= model.extent_mm)
     throw ModelError("model '" + source + "': cannot measure a tube diameter (is it a closed tube?)");
   model.symmetry_tolerance_mm = params.symmetry_tolerance_of_diameter * model.tube_diameter_mm;
-  model.symmetries = find_symmetries(model.surface, model.centroid, model.symmetry_tolerance_mm);
+  // The samples' spacing: a mapped sample lands between samples, up to this far from the nearest.
+  const float spacing_mm = std::sqrt(area / float(model.surface.points.size()));
+  model.symmetries = find_symmetries(model.surface, model.centroid, model.symmetry_tolerance_mm, spacing_mm);
   model.near_symmetries = find_near_symmetries(
       model.surface, model.centroid, params.near_symmetry_tolerance_of_diameter * model.tube_diameter_mm,
       params.near_symmetry_min_share, model.symmetries, model.tube_diameter_mm);

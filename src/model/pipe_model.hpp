@@ -58,8 +58,10 @@ float measure_tube_diameter(const Mesh& mesh, const std::vector<Eigen::Vector3f>
 float longest_extent(const std::vector<Eigen::Vector3f>& vertices);
 // Principal axes of a point set about `centroid`: the columns, by increasing spread.
 Eigen::Matrix3d principal_axes(const std::vector<Eigen::Vector3f>& points, const Eigen::Vector3f& centroid);
+// The half-turns about the principal axes that land (all but a sharp edge's share of) the samples
+// within tolerance_mm of the surface; spacing_mm is the samples' spacing (mesh discretisation).
 std::vector<Pose> find_symmetries(const SurfaceSamples& surface, const Eigen::Vector3f& centroid,
-                                  float tolerance_mm);
+                                  float tolerance_mm, float spacing_mm);
 // The half-turns about the principal axes, each refined on the surface it maps onto itself, that
 // bring at least min_share of the samples within tolerance_mm of the surface; those within
 // `exclude_mm` (largest sample displacement) of one of `exclude` are left out.

@@ -1,0 +1,78 @@
+// Thresholds derived from the model and from the noise measured in the frame.
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "locate/thresholds.hpp"
+
+namespace pipeloc {
+namespace {
+
+// A tilted plane at about `depth_mm` with Gaussian noise, a step edge across it and holes.
+Image<float> noisy_plane(double depth_mm, double sigma_mm, unsigned seed) {
+  Image<float> img(320, 240, 0.0f);
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> noise(0.0, sigma_mm);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  for (int j = 0; j < img.height; ++j)
+    for (int i = 0; i < img.width; ++i) {
+      if (u(rng) < 0.05) continue;                        // dropouts
+      const double edge = i > 200 ? -80.0 : 0.0;          // a pipe's side: a depth edge
+      img.at(i, j) = float(depth_mm + 0.3 * i - 0.2 * j + edge + noise(rng));
+    }
+  return img;
+}
+
+TEST(DepthNoise, MeasuredFromTheFrameWhateverTheSlopeAndEdges) {
+  NoiseHistograms h;
+  for (const double sigma : {0.5, 1.0, 2.0, 3.0}) {
+    const DepthNoise n = measure_depth_noise(noisy_plane(800, sigma, 7), &h);
+    EXPECT_NEAR(n.sigma_mm, sigma, 0.1 * sigma + 0.05) << sigma;
+    EXPECT_GT(n.depth_mm, 720) << sigma;  // between the plane's nearest and farthest parts
+    EXPECT_LT(n.depth_mm, 900) << sigma;
+    EXPECT_GT(n.samples, 10000);
+  }
+  // A frame with hardly any valid pixels: the fallback, not a guess from a handful.
+  Image<float> empty(320, 240, 0.0f);
+  empty.at(10, 10) = 900;
+  const DepthNoise none = measure_depth_noise(empty, &h);
+  EXPECT_EQ(none.samples, 0);
+  EXPECT_GT(none.sigma_mm, 0);
+}
+
+TEST(Thresholds, FollowTheTubeAndTheNoiseUnlessGiven) {
+  LocateConfig user;  // every derived key at 0 (the noise-dependent ones have fixed defaults)
+  user.continuity_step_max_mm = user.verify_tolerance_mm = user.refine_inlier_mm = 0;
+  user.hole_fill_mm = user.normal_window_mm = 0;
+  Intrinsics k;
+  const LocateConfig thin = with_model_thresholds(user, 10), thick = with_model_thresholds(user, 40);
+  EXPECT_LT(thin.hole_fill_mm, thick.hole_fill_mm);
+  EXPECT_NEAR(thick.hole_fill_mm / thin.hole_fill_mm, 4.0, 1e-6);
+  LocateConfig quiet = thin, noisy = thin;
+  set_frame_thresholds(user, 10, DepthNoise{0.5f, 600, 100000}, k, &quiet);
+  set_frame_thresholds(user, 10, DepthNoise{2.5f, 1200, 100000}, k, &noisy);
+  EXPECT_LT(quiet.continuity_step_max_mm, noisy.continuity_step_max_mm);
+  EXPECT_LT(quiet.verify_tolerance_mm, noisy.verify_tolerance_mm);
+  EXPECT_LT(quiet.refine_inlier_mm, noisy.refine_inlier_mm);
+  // Far away a pixel covers more: the plane-fit window never shrinks under 2.5 footprints.
+  EXPECT_GE(noisy.normal_window_mm, 2.5 * 1200 / k.fx - 1e-9);
+  // The paper's tubes at 1 m with the Kinect-class noise (measured: 2.37 mm) keep the values they
+  // were developed with.
+  LocateConfig paper = with_model_thresholds(user, 18);
+  set_frame_thresholds(user, 18, DepthNoise{2.37f, 1000, 100000}, k, &paper);
+  EXPECT_NEAR(paper.continuity_step_max_mm, 8, 0.5);
+  EXPECT_NEAR(paper.verify_tolerance_mm, 7, 0.5);
+  EXPECT_NEAR(paper.refine_inlier_mm, 4, 0.5);
+  EXPECT_NEAR(paper.normal_window_mm, 6.3, 0.1);
+  // A value given is used as given.
+  LocateConfig pinned = user;
+  pinned.verify_tolerance_mm = 5;
+  pinned.hole_fill_mm = 3;
+  LocateConfig in_effect = with_model_thresholds(pinned, 40);
+  set_frame_thresholds(pinned, 40, DepthNoise{3.0f, 1000, 100000}, k, &in_effect);
+  EXPECT_EQ(in_effect.verify_tolerance_mm, 5);
+  EXPECT_EQ(in_effect.hole_fill_mm, 3);
+}
+
+}  // namespace
+}  // namespace pipeloc

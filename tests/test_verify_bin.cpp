@@ -1,0 +1,114 @@
+// Verification that knows the bin: no pose below the floor, and a smooth blob is not a pipe.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "locate/locator.hpp"
+#include "model/make_pipe.hpp"
+#include "model/pipe_model.hpp"
+#include "locate_fixtures.hpp"
+
+namespace pipeloc {
+namespace {
+
+constexpr double kCameraHeightMm = 900;
+constexpr double kTubeMm = 20;
+
+// A camera straight above the origin of a floor at z = 0, and a straight tube of kTubeMm along the
+// world x axis with its axis at height axis_z_mm; `surround_z_mm` is the height of the flat
+// surface beside it (the floor: 0; a blob's flank: the axis height, so that nothing drops away).
+struct Scene {
+  CameraInfo camera;
+  Image<float> depth;
+};
+Scene straight_tube_scene(double axis_z_mm, double surround_z_mm) {
+  Scene s;
+  const Intrinsics& k = s.camera.intrinsics;
+  Pose w2c = Pose::Identity();
+  w2c.linear() = Eigen::Vector3d(1, -1, -1).asDiagonal();
+  w2c.translation() = Eigen::Vector3d(0, 0, kCameraHeightMm);
+  s.camera.world_to_cam = w2c;
+  s.depth.resize(k.width, k.height, 0.0f);
+  const double r = kTubeMm / 2, half_length = 75;
+  std::mt19937 rng(5);
+  std::normal_distribution<double> noise(0.0, 1.0);  // an active-stereo sensor's axial noise at 0.9 m
+  for (int v = 0; v < k.height; ++v)
+    for (int u = 0; u < k.width; ++u) {
+      // The ray in the world frame from the camera at (0, 0, H); its camera depth is the parameter t.
+      const Eigen::Vector3d d((u - k.cx) / k.fx, -(v - k.cy) / k.fy, -1.0);
+      // The flat surface beside the tube, 2.5 D either side of it; the floor beyond.
+      double t = kCameraHeightMm - surround_z_mm;
+      if (std::abs(t * d.y()) > 2.5 * kTubeMm || std::abs(t * d.x()) > half_length) t = kCameraHeightMm;
+      // The tube: (y(t))^2 + (z(t) - axis_z)^2 = r^2.
+      const double oz = kCameraHeightMm - axis_z_mm;
+      const double a = d.y() * d.y() + d.z() * d.z(), b = 2 * oz * d.z(), c = oz * oz - r * r;
+      const double disc = b * b - 4 * a * c;
+      if (disc >= 0) {
+        const double hit = (-b - std::sqrt(disc)) / (2 * a);
+        if (hit > 0 && std::abs(hit * d.x()) <= half_length) t = std::min(t, hit);
+      }
+      s.depth.at(u, v) = float(t + noise(rng));
+    }
+  return s;
+}
+
+const PipeModel& straight_tube() {
+  static const PipeModel model = [] {
+    PipeSpec spec;
+    spec.diameter_mm = kTubeMm;
+    spec.segments = parse_centreline("S150");
+    return derive_pipe_model(make_pipe(spec), "straight");
+  }();
+  return model;
+}
+
+// The model drawn at the true pose: its sides drop away on the floor, and stay level on a blob
+// whose flanks go on from its silhouette (decide() rejects a pose over 0.6 level: test_decide).
+TEST(BinAwareVerification, APipesSidesDropAwayASmoothBlobsDoNot) {
+  const PipeModel& model = straight_tube();
+  const LocatorModel lm = prepare_locator_model(model, 8, LocateConfig{});
+  const auto verify_at = [&](const Scene& s, double axis_z_mm) {
+    // The model's frame: the tube from x = 0 to 150 along its x axis (make_pipe), centred here.
+    Pose m2w = Pose::Identity();
+    m2w.translation() = Eigen::Vector3d(-75, 0, axis_z_mm);
+    const Pose m2c = *s.camera.world_to_cam * m2w;
+    Image<float> scratch(s.camera.intrinsics.width, s.camera.intrinsics.height, 0.0f);
+    ProjectedMesh projected;
+    projected.reserve(lm.verify_mesh);
+    return verify_pose(lm.verify_mesh, lm.verify_winding, m2c, s.depth, s.camera.intrinsics, 7.0f,
+                       0.25f * float(kTubeMm), &scratch, &projected);
+  };
+  const Verification on_floor = verify_at(straight_tube_scene(kTubeMm / 2, 0), kTubeMm / 2);
+  EXPECT_GT(on_floor.agreement(), 0.9);
+  EXPECT_GE(on_floor.side_px, kMinSidePx);
+  EXPECT_LT(on_floor.side_level(), 0.1);
+  // The blob: flanks a fifth of the tube above its axis, going on level from its silhouette.
+  const Verification blob = verify_at(straight_tube_scene(kTubeMm / 2, 0.7 * kTubeMm), kTubeMm / 2);
+  EXPECT_GT(blob.agreement(), 0.9);  // the top alone fits as well as a pipe's
+  EXPECT_GE(blob.side_px, kMinSidePx);
+  EXPECT_GT(blob.side_level(), LocateConfig{}.verify_max_side_level);
+}
+
+// On a simulated bin (floor at z = 0) the floor is found, a pipe's pose lies on it, and the same
+// pose four diameters lower lies under it.
+TEST(BinAwareVerification, NoPoseBelowTheFloor) {
+  const PipeModel& model = preset_model("sbend");
+  const SimulatedScene s = pile_of(model, 3, 4);
+  Locator loc(model, LocateConfig{}, s.camera.intrinsics);
+  const LocateOutput& out = loc.locate(s.depth_mm, s.camera);
+  EXPECT_NEAR(out.lowest_surface_z_mm, 0, 5);  // noise takes the 2nd percentile a little deeper
+  ASSERT_FALSE(out.estimates.empty());
+  const float d = model.tube_diameter_mm;
+  const float below = out.lowest_surface_z_mm - kBelowFloorOfD * d;
+  for (const PipeEstimate& e : out.estimates) {
+    EXPECT_LT(share_below(model.mesh, e.model_to_bin, below), kMaxShareBelowFloor);
+    EXPECT_EQ(e.check.below_floor, share_below(loc.locator_model().verify_mesh, e.model_to_bin, below));
+    Pose sunk = e.model_to_bin;
+    sunk.translation().z() -= 4 * d;  // under the floor whatever it lay on
+    EXPECT_GT(share_below(model.mesh, sunk, below), 0.9);
+  }
+}
+
+}  // namespace
+}  // namespace pipeloc
