@@ -218,7 +218,7 @@ void Locator::build_zbuffer_banded(const Image<float>& depth, const CameraInfo& 
     static void points(void* ctx, int band, int) {
       Bands& b = *static_cast<Bands*>(ctx);
       zbuffer_points_rows(*b.depth, *b.k, *b.bin_to_cam, b.self->zb_.pixel_mm, b.lo(band, b.depth->height),
-                          b.hi(band, b.depth->height), band, &b.self->zb_points_);
+                          b.hi(band, b.depth->height), band, &b.self->zb_points_, b.self->cfg_.roi);
     }
     static void splat(void* ctx, int band, int) {
       Bands& b = *static_cast<Bands*>(ctx);
