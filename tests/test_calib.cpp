@@ -10,9 +10,13 @@
 #include "calib/bin_frame.hpp"
 #include "calib/hand_eye.hpp"
 #include "calib/sphere_fit.hpp"
+#include "calib/stations.hpp"
 #include "config/config_file.hpp"
+#include "io/bop.hpp"
+#include "io/png.hpp"
 #include "locate/zbuffer.hpp"
 #include "model/make_pipe.hpp"
+#include "plc/robot_pose.hpp"
 #include "sim/scene.hpp"
 #include "test_util.hpp"
 
@@ -311,6 +315,89 @@ TEST(CalibrateHandEye, SolvesRobotFromCameraFromSixStations) {
   for (std::size_t i = 0; i < bad.outlier.size(); ++i) EXPECT_EQ(bad.outlier[i], i == 3) << i;
   EXPECT_EQ(bad.used, 6);
   EXPECT_LT(rotation_angle_deg(bad.robot_from_camera.linear(), truth.linear()), 0.2);
+}
+
+// The station file as the integrator writes it (half the stations as the sphere's position, half
+// as flange poses with the sphere's offset), with the frames as 16-bit PNGs: the command's path.
+TEST(CalibrateHandEye, StationFileToTransform) {
+  const double r = 25;
+  const Mesh sphere = uv_sphere(r, 96, 48);
+  Pose truth = Pose::Identity();
+  truth.linear() = Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  truth.translation() = Eigen::Vector3d(700, 50, 1500);
+  const Eigen::Vector3d offset(0, 0, 180);  // sphere centre in the flange frame
+  const Eigen::Vector3d stations[] = {{-200, -150, 760}, {210, -140, 820}, {190, 160, 900},
+                                      {-180, 170, 850},  {0, 0, 950},      {60, -60, 700}};
+  test::TempDir dir;
+  CameraInfo cam;
+  cam.depth_scale = 0.1;
+  write_json(dir.file("camera.json"), Json{{"0", camera_to_json(cam)}});
+  std::string toml =
+      "sphere_radius_mm = 25\ncamera = \"camera.json\"\neuler = \"ZYX\"\n"
+      "sphere_in_flange_mm = [0, 0, 180]\n";
+  std::mt19937 rng(21);
+  for (int i = 0; i < 6; ++i) {
+    const std::string png = "station" + std::to_string(i) + ".png";
+    write_depth_png(dir.file(png), to_raw_depth(sphere_frame(sphere, stations[i], rng), cam.depth_scale));
+    const Eigen::Vector3d in_robot = truth * stations[i];
+    char line[256];
+    if (i % 2 == 0) {
+      std::snprintf(line, sizeof line, "[[station]]\ndepth = \"%s\"\ntcp_mm = [%.2f, %.2f, %.2f]\n",
+                    png.c_str(), in_robot.x(), in_robot.y(), in_robot.z());
+    } else {  // a flange pose turned some way, the sphere 180 mm along its z
+      const std::array<double, 3> rxyz{170.0 - 5 * i, 10.0 * i, -30.0 + 12 * i};
+      const Eigen::Matrix3d rot = rotation_from_euler_deg(rxyz, EulerConvention::zyx);
+      const Eigen::Vector3d flange = in_robot - rot * offset;
+      std::snprintf(
+          line, sizeof line,
+          "[[station]]\ndepth = \"%s\"\nflange_xyz_mm = [%.2f, %.2f, %.2f]\nflange_rxyz_deg = [%.3f, "
+          "%.3f, %.3f]\n",
+          png.c_str(), flange.x(), flange.y(), flange.z(), rxyz[0], rxyz[1], rxyz[2]);
+    }
+    toml += line;
+  }
+  test::write_text(dir.file("stations.toml"), toml);
+  const StationFile file = read_stations(dir.file("stations.toml"));
+  ASSERT_EQ(file.stations.size(), 6u);
+  const CameraInfo read_cam = read_scene_camera(file.camera).begin()->second;
+  SphereFitParams params;
+  params.radius_mm = file.radius_mm;
+  std::vector<Eigen::Vector3d> in_cam, in_robot;
+  for (const Station& st : file.stations) {
+    const SphereFit fit =
+        find_sphere(read_depth_mm(st.depth, read_cam.depth_scale), read_cam.intrinsics, params);
+    ASSERT_TRUE(fit.ok) << st.depth;
+    in_cam.push_back(fit.centre_mm);
+    in_robot.push_back(st.sphere_in_robot);
+  }
+  const HandEyeResult he = solve_hand_eye(in_cam, in_robot);
+  ASSERT_TRUE(he.ok) << he.error;
+  EXPECT_LT(rotation_angle_deg(he.robot_from_camera.linear(), truth.linear()), 0.2);
+  EXPECT_LT((he.robot_from_camera * Eigen::Vector3d(0, 0, 1000) - truth * Eigen::Vector3d(0, 0, 1000)).norm(),
+            1.0);
+
+  // Mistakes name the key.
+  auto error_of = [&](const std::string& text) -> std::string {
+    test::write_text(dir.file("bad.toml"), text);
+    try {
+      read_stations(dir.file("bad.toml"));
+    } catch (const ConfigError& e) {
+      return e.what();
+    }
+    return "";
+  };
+  EXPECT_NE(error_of("camera = \"c.json\"\n").find("sphere_radius_mm"), std::string::npos);
+  EXPECT_NE(error_of("sphere_radius_mm = 25\ncamera = \"c.json\"\n[[station]]\ndepth = \"a.png\"\n")
+                .find("station[1].tcp_mm"),
+            std::string::npos);
+  EXPECT_NE(error_of("sphere_radius_mm = 25\ncamera = \"c.json\"\n[[station]]\ndepth = \"a.png\"\n"
+                     "flange_xyz_mm = [1, 2, 3]\nflange_rxyz_deg = [0, 0, 0]\n")
+                .find("sphere_in_flange_mm"),
+            std::string::npos);
+  EXPECT_NE(error_of("sphere_radius_mm = 25\ncamera = \"c.json\"\n[[station]]\ndepth = \"a.png\"\n"
+                     "tcp_mm = [1, 2, 3]\n")
+                .find("at least 4"),
+            std::string::npos);
 }
 
 TEST(CalibrateHandEye, RejectsTooFewOrCollinearStations) {
