@@ -61,19 +61,26 @@ double densest_strip(const Profile& p, double from, int dir, double min_peak) {
 }
 
 // A wall's inner face, near `wall` (its densest strip) on the side dir of the centre: the inner
-// edge of its top, which every camera above the bin sees. The top is the highest surface there;
+// edge of its top, which every camera above the bin sees. The top is the commonest height there;
 // its points are profiled alone (a visible inner face would blur the edge by the depth noise),
 // and the edge is where that profile, coming from the centre, reaches `share` of its plateau.
 double wall_inner_face(const std::vector<FloorPoint>& high, double c, double s, double wall, int dir,
                        const BinCalibParams& params) {
   constexpr double kNear = 40, kReach = 100, kTopBand = 12;
-  std::vector<double> heights;
+  // The top's height: the most common height of the high points there (a horizontal surface puts
+  // all its points at one height; a visible face and pipes piled against the wall spread theirs).
+  constexpr double kHeightBin = 4;
+  std::vector<int> count(1000, 0);
+  int near = 0;
   for (const FloorPoint& p : high)
-    if (std::abs(c * p.u + s * p.v - wall) <= kNear) heights.push_back(p.h);
-  if (heights.size() < 50) return std::nan("");
-  const std::size_t q = heights.size() * 98 / 100;
-  std::nth_element(heights.begin(), heights.begin() + long(q), heights.end());
-  const double top = heights[q];
+    if (std::abs(c * p.u + s * p.v - wall) <= kNear && p.h < 4000)
+      ++count[std::size_t(p.h / kHeightBin)], ++near;
+  if (near < 50) return std::nan("");
+  std::size_t mode = 0;
+  for (std::size_t i = 1; i + 1 < count.size(); ++i)
+    if (count[i - 1] + count[i] + count[i + 1] > count[mode - (mode > 0)] + count[mode] + count[mode + 1])
+      mode = i;
+  const double top = (double(mode) + 0.5) * kHeightBin;
   Profile tp;
   for (const FloorPoint& p : high) {
     const double x = c * p.u + s * p.v;
