@@ -141,6 +141,7 @@ void add_locate(CLI::App& app) {
 void add_eval_bop(CLI::App& app) {
   struct Options {
     std::string dataset, out, config, match = "zridge", overlays, picks;
+    double budget_ms = 0;
   };
   auto opt = std::make_shared<Options>();
   auto* cmd = app.add_subcommand("eval-bop", "Run every target of a BOP dataset and write BOP results CSV");
@@ -153,6 +154,9 @@ void add_eval_bop(CLI::App& app) {
   cmd->add_option("--picks", opt->picks,
                   "also write the pose the service would hand out per image (the first pickable; no row = "
                   "DONE_NONE), BOP results CSV");
+  cmd->add_option("--budget-ms", opt->budget_ms,
+                  "localize each image under this budget (ms), as the service's cycle does (0 = none)")
+      ->check(CLI::Range(0.0, 60000.0));
   cmd->callback([opt] {
     LocateConfig cfg = config_or_default(opt->config).locate;
     cfg.match_surface = opt->match == "surface";
@@ -180,7 +184,10 @@ void add_eval_bop(CLI::App& app) {
         locators[t.obj_id] = std::make_unique<Locator>(*models[t.obj_id], cfg, cam.intrinsics);
       }
       Locator& locator = *locators[t.obj_id];
-      const LocateOutput& out = locator.locate(depth, cam);
+      // The service's deadline starts at the trigger; here, when the frame is in memory.
+      const Clock::time_point deadline =
+          opt->budget_ms > 0 ? Clock::now() + ms_duration(opt->budget_ms) : Clock::time_point::max();
+      const LocateOutput& out = locator.locate(depth, cam, deadline);
       for (const auto& e : out.estimates) {
         write_result_row(
             csv, {t.scene_id, t.im_id, t.obj_id, e.score, e.model_to_cam, out.times.total_ms / 1000.0});

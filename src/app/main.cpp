@@ -30,6 +30,8 @@ int main(int argc, char** argv) {
   pipeloc::app::add_serve(app);
   pipeloc::app::add_record(app);
   pipeloc::app::add_timing_report(app);
+  pipeloc::app::add_calibrate_bin(app);
+  pipeloc::app::add_calibrate_hand_eye(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -147,6 +147,28 @@ class Section {
   std::set<std::string> taken_;
 };
 
+// [locate] roi_min_mm / roi_max_mm: the bin interior in the bin frame (calibrate-bin prints it);
+// both or neither, min below max on each axis.
+void read_roi(Section& s, RegionOfInterest* roi) {
+  std::vector<double> lo, hi;
+  if (roi->on()) lo = {roi->min_x_mm, roi->min_y_mm}, hi = {roi->max_x_mm, roi->max_y_mm};
+  s.numbers("roi_min_mm", &lo, 2, "x y, mm, bin frame");
+  s.numbers("roi_max_mm", &hi, 2, "x y, mm, bin frame");
+  if (lo.empty() != hi.empty())
+    fail(s.file(), lo.empty() ? "locate.roi_min_mm" : "locate.roi_max_mm",
+         "missing: give roi_min_mm and roi_max_mm together (pipeloc calibrate-bin prints both)");
+  if (lo.empty()) return;
+  for (int i = 0; i < 2; ++i) {
+    if (std::abs(lo[i]) > 5000 || std::abs(hi[i]) > 5000)
+      fail(s.file(), "locate.roi_min_mm", "expected values within +-5000 mm");
+    if (!(lo[i] < hi[i]))
+      fail(s.file(), "locate.roi_min_mm",
+           std::string("its ") + (i ? "y" : "x") +
+               " must be below roi_max_mm's (the bin interior, min corner first)");
+  }
+  *roi = {lo[0], lo[1], hi[0], hi[1]};
+}
+
 void read_locate(Section& s, LocateConfig* c) {
   s.real("zbuffer_pixel_mm", &c->zbuffer_pixel_mm, 0.25, 10, "mm");
   s.real("zbuffer_max_side_mm", &c->zbuffer_max_side_mm, 100, 5000, "mm");
@@ -195,6 +217,7 @@ void read_locate(Section& s, LocateConfig* c) {
   s.integer("max_candidates", &c->max_candidates, 1, 256, "regions");
   s.integer("max_results", &c->max_results, 1, 256, "poses");
   s.integer("threads", &c->threads, 1, 64, "threads");
+  read_roi(s, &c->roi);
   s.finish();
   if (c->section_width_min_of_d >= c->section_width_max_of_d)
     fail(s.file(), "locate.section_width_min_of_d", "must be below locate.section_width_max_of_d");

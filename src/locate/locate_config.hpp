@@ -5,7 +5,16 @@
 
 namespace pipeloc {
 
+// The bin interior in the bin frame (pipeloc calibrate-bin prints it): depth points outside it
+// never enter the Z-buffer, so bin walls and rims give no candidates. Off when unset (min >= max).
+struct RegionOfInterest {
+  double min_x_mm = 0, min_y_mm = 0, max_x_mm = 0, max_y_mm = 0;
+  bool on() const { return min_x_mm < max_x_mm && min_y_mm < max_y_mm; }
+};
+
 struct LocateConfig {
+  RegionOfInterest roi;  // [locate] roi_min_mm / roi_max_mm
+
   // II-A: Z-buffer and normals.
   double zbuffer_pixel_mm = 1.0;        // the paper's 1 mm cells
   double zbuffer_max_side_mm = 1600;    // the Z-buffer covers at most this square of the bin

@@ -173,7 +173,7 @@ void Locator::build_zbuffer_banded(const Image<float>& depth, const CameraInfo& 
   const Intrinsics& k = camera.intrinsics;
   pool_.run(bands, [&](int band, int) {
     zbuffer_points_rows(depth, k, bin_to_cam, zb_.pixel_mm, lo(band, depth.height), hi(band, depth.height),
-                        band, &zb_points_);
+                        band, &zb_points_, cfg_.roi);
   });
   out_.valid_pixels = place_zbuffer(zb_points_, bands, &zb_);
   if (out_.valid_pixels == 0) return;

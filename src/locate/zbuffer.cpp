@@ -38,7 +38,11 @@ void reserve_zbuffer_points(ZBufferPoints* pts, int width, int height, int bands
 }
 
 void zbuffer_points_rows(const Image<float>& depth, const Intrinsics& k, const Pose& bin_to_cam,
-                         double pixel_mm, int v0, int v1, int band, ZBufferPoints* pts) {
+                         double pixel_mm, int v0, int v1, int band, ZBufferPoints* pts,
+                         const RegionOfInterest& roi) {
+  const bool clip = roi.on();
+  const float roi_lo_x = float(roi.min_x_mm), roi_lo_y = float(roi.min_y_mm), roi_hi_x = float(roi.max_x_mm),
+              roi_hi_y = float(roi.max_y_mm);
   const Eigen::Matrix3f r = bin_to_cam.linear().transpose().cast<float>();  // camera -> bin
   const Eigen::Vector3f t = (-bin_to_cam.linear().transpose() * bin_to_cam.translation()).cast<float>();
   const float fx = float(k.fx), fy = float(k.fy), cx = float(k.cx), cy = float(k.cy);
@@ -55,6 +59,10 @@ void zbuffer_points_rows(const Image<float>& depth, const Intrinsics& k, const P
       }
       const Eigen::Vector3f p =
           r * Eigen::Vector3f((float(u) - cx) * d / fx, (float(v) - cy) * d / fy, d) + t;
+      if (clip && !(p.x() >= roi_lo_x && p.x() <= roi_hi_x && p.y() >= roi_lo_y && p.y() <= roi_hi_y)) {
+        out.w() = -1;
+        continue;
+      }
       out = Eigen::Vector4f(p.x(), p.y(), p.z(), 0.5f * d / fx * inv);
       e.lo_x = std::min(e.lo_x, p.x()), e.hi_x = std::max(e.hi_x, p.x());
       e.lo_y = std::min(e.lo_y, p.y()), e.hi_y = std::max(e.hi_y, p.y());

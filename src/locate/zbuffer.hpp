@@ -8,6 +8,7 @@
 
 #include "core/camera.hpp"
 #include "core/image.hpp"
+#include "locate/locate_config.hpp"
 
 namespace pipeloc {
 
@@ -60,9 +61,10 @@ void reserve_zbuffer_points(ZBufferPoints* pts, int width, int height, int bands
 
 // Step 1, image rows [v0, v1) as band `band`: each valid pixel in the bin frame, with the
 // half-width of its footprint in buffer cells (so cells finer than the sensor's pixels are not
-// left with holes).
+// left with holes). Points outside `roi` (when on) count as no reading.
 void zbuffer_points_rows(const Image<float>& depth_mm, const Intrinsics& k, const Pose& bin_to_cam,
-                         double pixel_mm, int v0, int v1, int band, ZBufferPoints* pts);
+                         double pixel_mm, int v0, int v1, int band, ZBufferPoints* pts,
+                         const RegionOfInterest& roi = {});
 // Between the steps: places the buffer over the bands' extent (its middle, when larger than the
 // buffer). Returns the number of valid depth pixels.
 int place_zbuffer(const ZBufferPoints& pts, int bands, ZBuffer* zb);

@@ -13,25 +13,48 @@ constexpr Glyph kGlyphs[] = {
     {'4', {5, 5, 7, 1, 1}}, {'5', {7, 4, 7, 1, 7}}, {'6', {7, 4, 7, 5, 7}}, {'7', {7, 1, 1, 1, 1}},
     {'8', {7, 5, 7, 5, 7}}, {'9', {7, 5, 7, 1, 7}}, {'.', {0, 0, 0, 0, 2}}, {'-', {0, 0, 7, 0, 0}},
     {'%', {5, 1, 2, 4, 5}}, {'m', {0, 0, 7, 7, 5}}, {'s', {0, 3, 6, 1, 6}}, {'p', {0, 7, 5, 7, 4}},
+    {'A', {2, 5, 7, 5, 5}}, {'B', {6, 5, 6, 5, 6}}, {'C', {3, 4, 4, 4, 3}}, {'D', {6, 5, 5, 5, 6}},
+    {'E', {7, 4, 6, 4, 7}}, {'F', {7, 4, 6, 4, 4}}, {'G', {3, 4, 5, 5, 3}}, {'H', {5, 5, 7, 5, 5}},
+    {'I', {7, 2, 2, 2, 7}}, {'J', {1, 1, 1, 5, 2}}, {'K', {5, 5, 6, 5, 5}}, {'L', {4, 4, 4, 4, 7}},
+    {'M', {5, 7, 7, 5, 5}}, {'N', {6, 5, 5, 5, 5}}, {'O', {2, 5, 5, 5, 2}}, {'P', {6, 5, 6, 4, 4}},
+    {'Q', {2, 5, 5, 6, 3}}, {'R', {6, 5, 6, 5, 5}}, {'S', {3, 4, 2, 1, 6}}, {'T', {7, 2, 2, 2, 2}},
+    {'U', {5, 5, 5, 5, 7}}, {'V', {5, 5, 5, 5, 2}}, {'W', {5, 5, 7, 7, 5}}, {'X', {5, 5, 2, 5, 5}},
+    {'Y', {5, 5, 2, 2, 2}}, {'Z', {7, 1, 2, 4, 7}}, {':', {0, 2, 0, 2, 0}}, {'#', {5, 7, 5, 7, 5}},
+    {'/', {1, 1, 2, 4, 4}}, {'(', {1, 2, 2, 2, 1}}, {')', {4, 2, 2, 2, 4}}, {'=', {0, 7, 0, 7, 0}},
+    {'+', {0, 2, 7, 2, 0}}, {',', {0, 0, 0, 2, 4}}, {'<', {1, 2, 4, 2, 1}}, {'>', {4, 2, 1, 2, 4}},
 };
+
+const Glyph* glyph_of(char ch) {
+  for (const Glyph& g : kGlyphs)
+    if (g.c == ch) return &g;
+  // Lower case without a glyph of its own is drawn in capitals.
+  if (ch >= 'a' && ch <= 'z') return glyph_of(char(ch - 'a' + 'A'));
+  return nullptr;
+}
 
 }  // namespace
 
 void draw_text(Image<Rgb>* img, int x, int y, const std::string& text, Rgb color, int scale) {
   for (const char ch : text) {
-    for (const Glyph& g : kGlyphs) {
-      if (g.c != ch) continue;
+    if (const Glyph* g = glyph_of(ch))
       for (int r = 0; r < 5; ++r)
         for (int c = 0; c < 3; ++c)
-          if (g.rows[r] & (4 >> c))
+          if (g->rows[r] & (4 >> c))
             for (int dy = 0; dy < scale; ++dy)
               for (int dx = 0; dx < scale; ++dx) {
                 const int px = x + c * scale + dx, py = y + r * scale + dy;
                 if (img->inside(px, py)) img->at(px, py) = color;
               }
-    }
     x += 4 * scale;
   }
+}
+
+void draw_label(Image<Rgb>* img, int x, int y, const std::string& text, Rgb color, int scale) {
+  const int w = int(text.size()) * 4 * scale + scale, h = 7 * scale;
+  for (int py = y - scale; py < y - scale + h; ++py)
+    for (int px = x - scale; px < x - scale + w; ++px)
+      if (img->inside(px, py)) img->at(px, py) = {20, 20, 20};
+  draw_text(img, x, y, text, color, scale);
 }
 
 }  // namespace pipeloc

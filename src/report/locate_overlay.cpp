@@ -1,8 +1,11 @@
 #include "report/locate_overlay.hpp"
 
 #include <algorithm>
+#include <cstdio>
+#include <iterator>
 
 #include "render/raster.hpp"
+#include "render/text.hpp"
 
 namespace pipeloc {
 namespace {
@@ -25,6 +28,33 @@ void draw_outline(Image<Rgb>* img, const Mesh& mesh, const Pose& model_to_cam, c
                         scratch->at(x, y - 1) <= 0 || scratch->at(x, y + 1) <= 0;
       if (edge) draw_dot(img, x, y, thickness / 2, color);
     }
+}
+
+void draw_legend(Image<Rgb>* img) {
+  struct Entry {
+    Rgb color;
+    const char* text;
+  };
+  const Entry entries[] = {{kPick, "PICK: POSE HANDED TO THE PLC"},
+                           {kOutline, "POSE, PICKABLE (R<RANK> <SCORE> OK)"},
+                           {kOther, "POSE, NOT PICKABLE (NO)"},
+                           {kCore, "CORE REGION (UPWARD NORMALS)"},
+                           {kRegion, "CANDIDATE REGION (GROWN)"},
+                           {kAxis, "PRINCIPAL DIRECTION"},
+                           {kRidge, "Z-RIDGE POINTS"}};
+  const int scale = 1, line = 9, x0 = 4, y0 = 4;
+  const int w = 8 + 4 * scale * 36, h = line * int(std::size(entries)) + 4;
+  for (int y = y0; y < y0 + h; ++y)
+    for (int x = x0; x < x0 + w; ++x)
+      if (img->inside(x, y)) img->at(x, y) = {20, 20, 20};
+  int y = y0 + 3;
+  for (const Entry& e : entries) {
+    for (int dy = 0; dy < 5; ++dy)
+      for (int dx = 0; dx < 8; ++dx)
+        if (img->inside(x0 + 3 + dx, y + dy)) img->at(x0 + 3 + dx, y + dy) = e.color;
+    draw_text(img, x0 + 15, y, e.text, {235, 235, 235}, scale);
+    y += line;
+  }
 }
 
 }  // namespace
@@ -68,14 +98,23 @@ Image<Rgb> draw_locate_overlay(const Locator& loc, const Image<float>& depth, co
   }
   for (std::size_t c = 0; c < out.traces.size(); ++c) {
     const CandidateTrace& t = out.traces[c];
-    const float half = loc.locator_model().extent_l_mm / 2;
+    // III's principal direction, drawn across its own region only.
     const Eigen::Vector3f dir(t.axis.axis.x(), t.axis.axis.y(), 0);
-    const Eigen::Vector2d a = to_pixel(cam, bin_to_cam, t.axis.centre - half * dir);
-    const Eigen::Vector2d b = to_pixel(cam, bin_to_cam, t.axis.centre + half * dir);
+    float lo = 0, hi = 0;
+    if (c < rb.candidates.size()) {
+      const CandidateRegion& r = rb.candidates[c];
+      for (int k = r.cells_begin; k < r.cells_end; ++k) {
+        const int cell = rb.region_cells[std::size_t(k)];
+        const float along = (zb.point(cell % w, cell / w) - t.axis.centre).dot(dir);
+        lo = std::min(lo, along), hi = std::max(hi, along);
+      }
+    }
+    const Eigen::Vector2d a = to_pixel(cam, bin_to_cam, t.axis.centre + lo * dir);
+    const Eigen::Vector2d b = to_pixel(cam, bin_to_cam, t.axis.centre + hi * dir);
     draw_line(&img, a.x(), a.y(), b.x(), b.y(), kAxis, 1);
     for (int k = 0; k < t.ridge_count; ++k) {
       const Eigen::Vector2d p = to_pixel(cam, bin_to_cam, loc.ridge_points()[std::size_t(t.ridge_begin + k)]);
-      draw_dot(&img, p.x(), p.y(), 0, kRidge);
+      draw_dot(&img, p.x(), p.y(), 1, kRidge);
     }
   }
   if (pick >= 0) {
@@ -84,6 +123,22 @@ Image<Rgb> draw_locate_overlay(const Locator& loc, const Image<float>& depth, co
     draw_line(&img, c.x() - 8, c.y() - 8, c.x() + 8, c.y() + 8, kPick, 3);
     draw_line(&img, c.x() - 8, c.y() + 8, c.x() + 8, c.y() - 8, kPick, 3);
   }
+  // Beside each pose: rank (0 = best, as the PLC's INDEX), score, pickable or not.
+  for (int i = int(out.estimates.size()) - 1; i >= 0; --i) {
+    const PipeEstimate& e = out.estimates[std::size_t(i)];
+    const Eigen::Vector2d c =
+        cam.intrinsics.project(e.model_to_cam * loc.locator_model().centroid.cast<double>());
+    char text[48];
+    std::snprintf(text, sizeof text, "%sR%d %.2f%s", i == pick ? "PICK " : "", i, e.score,
+                  i == pick    ? ""
+                  : e.pickable ? " OK"
+                               : " NO");
+    draw_label(&img, int(c.x()) + 12, int(c.y()) - 16, text,
+               i == pick    ? kPick
+               : e.pickable ? kOutline
+                            : kOther);
+  }
+  draw_legend(&img);
   return img;
 }
 
