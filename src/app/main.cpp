@@ -35,7 +35,9 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    // --help and --version succeed; any other command-line error is a start-up error: exit 2,
+    // as a bad config or model is (CLI11's own codes run 104-114).
+    return app.exit(e) == 0 ? 0 : 2;
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());
     return 2;

@@ -36,4 +36,12 @@ awk '$1 == "cycle" && $2 > 0 { ok = 1 } END { exit !ok }' "$work/bench.txt" || f
 
 if "$bin" bench --dataset "$work/nowhere" > "$work/err.txt" 2>&1; then fail "bench on a missing dataset exited 0"; fi
 grep -q "nowhere" "$work/err.txt" || fail "the error does not name the dataset: $(cat "$work/err.txt")"
+# A command-line error is a start-up error: exit 2 with a message naming the option; --help is 0.
+set +e
+"$bin" eval-bop --dataset "$work/ds" --out "$work/r.csv" --no-such-option > "$work/err.txt" 2>&1
+status=$?
+set -e
+[ "$status" -eq 2 ] || fail "an unknown option exited $status, not 2"
+grep -q "no-such-option" "$work/err.txt" || fail "the error does not name the option: $(cat "$work/err.txt")"
+"$bin" eval-bop --help > /dev/null || fail "--help did not exit 0"
 echo "1 passed, 0 failed"
