@@ -1,6 +1,9 @@
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "model/make_pipe.hpp"
+#include "model/pipe_model.hpp"
 #include "model/stl.hpp"
 #include "test_util.hpp"
 
@@ -61,6 +64,33 @@ TEST(Stl, MissingFileIsNamed) {
   const std::string msg = error_of("/nonexistent/pipe.stl");
   EXPECT_NE(msg.find("/nonexistent/pipe.stl"), std::string::npos) << msg;
   EXPECT_NE(msg.find("cannot open"), std::string::npos) << msg;
+}
+
+TEST(Stl, ADirectoryIsNamedAsOne) {
+  TempDir dir;
+  const std::string msg = error_of(dir.path());
+  EXPECT_NE(msg.find("is a directory"), std::string::npos) << msg;
+}
+
+// Millimetres are the contract: the same pipe written in metres is refused with the likely cause.
+TEST(Stl, AModelInMetresIsRefusedWithTheCause) {
+  Mesh metres = small_pipe();
+  for (auto& v : metres.vertices) v /= 1000.0f;
+  try {
+    derive_pipe_model(metres, "metres.stl");
+    ADD_FAILURE() << "a 0.02 mm tube was accepted";
+  } catch (const ModelError& e) {
+    EXPECT_NE(std::string(e.what()).find("in metres"), std::string::npos) << e.what();
+  }
+}
+
+TEST(MakePipe, DiameterMustBeANumberAboveZero) {
+  for (const double d : {0.0, -20.0, std::nan("")}) {
+    PipeSpec spec;
+    spec.diameter_mm = d;
+    spec.segments = parse_centreline("S100");
+    EXPECT_THROW(make_pipe(spec), ModelError) << d;
+  }
 }
 
 TEST(Stl, EmptyFile) {

@@ -103,7 +103,8 @@ PipeSpec pipe_preset(const std::string& name) {
 }
 
 Mesh make_pipe(const PipeSpec& spec) {
-  if (spec.diameter_mm <= 0) throw ModelError("pipe diameter must be > 0");
+  if (!(spec.diameter_mm > 0) || !std::isfinite(spec.diameter_mm))
+    throw ModelError("pipe diameter must be a number > 0 mm (got " + std::to_string(spec.diameter_mm) + ")");
   if (spec.segments.empty()) throw ModelError("pipe centreline has no segments");
   const double r = spec.diameter_mm / 2;
   const int sides = std::max(8, spec.sides);

@@ -340,6 +340,11 @@ PipeModel derive_pipe_model(Mesh mesh, const std::string& source, const ModelDer
   model.extent_mm = longest_extent(model.mesh.vertices);
   if (!(model.tube_diameter_mm > 0) || model.tube_diameter_mm >= model.extent_mm)
     throw ModelError("model '" + source + "': cannot measure a tube diameter (is it a closed tube?)");
+  // A tube under a millimetre is no pipe a depth sensor sees: most likely the STL is in metres.
+  constexpr float kMinTubeMm = 1.0f;
+  if (model.tube_diameter_mm < kMinTubeMm)
+    throw ModelError("model '" + source + "': tube diameter " + std::to_string(model.tube_diameter_mm) +
+                     " mm, under 1 mm: the STL must be in millimetres (is it in metres?)");
   model.symmetry_tolerance_mm = params.symmetry_tolerance_of_diameter * model.tube_diameter_mm;
   // The samples' spacing: a mapped sample lands between samples, up to this far from the nearest.
   const float spacing_mm = std::sqrt(area / float(model.surface.points.size()));

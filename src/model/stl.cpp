@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <sstream>
@@ -85,6 +86,8 @@ Mesh parse_ascii(const std::string& path, const std::string& text) {
 }  // namespace
 
 Mesh read_stl(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) fail(path, "is a directory, not an STL file");
   std::ifstream file(path, std::ios::binary);
   if (!file) fail(path, "cannot open file");
   const std::string bytes((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
