@@ -114,11 +114,13 @@ void add_locate(CLI::App& app) {
         out.regions.claimed, out.regions.overlapping, out.times.total_ms,
         pick >= 0 ? "rank " + std::to_string(pick) : std::string("none"));
     const StageTimes& st = out.times;
-    spdlog::info("depth noise {:.2f} mm (1 sigma, measured) at a median depth of {:.0f} mm: continuity step {:.1f} mm, "
-                 "verify tolerance {:.1f} mm, refine inliers {:.1f} mm, normal window {:.1f} mm",
-                 out.noise.sigma_mm, out.noise.depth_mm, locator.config().continuity_step_max_mm,
-                 locator.config().verify_tolerance_mm, locator.config().refine_inlier_mm,
-                 locator.config().normal_window_mm);
+    if (out.noise.samples > 0)
+      spdlog::info("depth noise {:.2f} mm (1 sigma, measured) at a median depth of {:.0f} mm", out.noise.sigma_mm,
+                   out.noise.depth_mm);
+    spdlog::info("thresholds in effect: continuity step {:.1f} mm, verify tolerance {:.1f} mm, refine inliers "
+                 "{:.1f} mm, normal window {:.1f} mm, hole fill {:.1f} mm",
+                 locator.config().continuity_step_max_mm, locator.config().verify_tolerance_mm,
+                 locator.config().refine_inlier_mm, locator.config().normal_window_mm, locator.config().hole_fill_mm);
     spdlog::info(
         "stages ms: zbuffer {:.1f} normals {:.1f} regions {:.1f} axis {:.1f} ridge_icp {:.1f} refine {:.1f} "
         "verify {:.1f}",

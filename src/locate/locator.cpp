@@ -47,9 +47,12 @@ const LocateOutput& Locator::locate(const Image<float>& depth, const CameraInfo&
   out_.budget_exhausted = false;
   out_.regions = {};
   const Pose bin_to_cam = bin_to_camera(camera);
-  // The thresholds that follow the sensor: its noise and pixel footprint, measured in this frame.
-  out_.noise = measure_depth_noise(depth, &noise_histograms_);
-  set_frame_thresholds(user_cfg_, model_.tube_diameter_mm, out_.noise, camera.intrinsics, &cfg_);
+  // The thresholds that follow the sensor: its noise and pixel footprint, measured in this frame
+  // (only when a key is left to be derived from it).
+  if (derives_from_frame(user_cfg_)) {
+    out_.noise = measure_depth_noise(depth, &noise_histograms_);
+    set_frame_thresholds(user_cfg_, model_.tube_diameter_mm, out_.noise, camera.intrinsics, &cfg_);
+  }
   // Anytime: what is not expected to finish before the deadline is not started. The expected
   // durations are running averages of earlier cycles (none yet: everything is tried).
   if (deadline != Clock::time_point::max() && t_start + ms_duration(serial_ms_avg_) > deadline) {

@@ -26,7 +26,7 @@ struct LocateOutput {
   RegionStats regions;
   StageTimes times;
   int valid_pixels = 0;
-  DepthNoise noise;  // measured in the frame; the derived thresholds follow it
+  DepthNoise noise;  // measured in the frame when a threshold derives from it (else samples = 0)
   float lowest_surface_z_mm = 0;  // bin frame: the floor where it is seen (no pose lies below it)
   bool budget_exhausted = false;
   int pick() const {

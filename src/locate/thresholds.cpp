@@ -117,6 +117,11 @@ void set_frame_thresholds(const LocateConfig& user, float d, const DepthNoise& n
   }
 }
 
+bool derives_from_frame(const LocateConfig& user) {
+  return user.continuity_step_max_mm <= 0 || user.verify_tolerance_mm <= 0 || user.refine_inlier_mm <= 0 ||
+         user.normal_window_mm <= 0;
+}
+
 float max_refine_inlier_mm(const LocateConfig& user, float d) {
   if (user.refine_inlier_mm > 0) return float(user.refine_inlier_mm);
   return float(std::max(kRefineInlierOfSigma * kMaxSigmaMm, kRefineInlierOfD * double(d)));

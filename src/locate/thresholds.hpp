@@ -39,6 +39,10 @@ LocateConfig with_model_thresholds(const LocateConfig& user, float tube_d_mm);
 void set_frame_thresholds(const LocateConfig& user, float tube_d_mm, const DepthNoise& noise,
                           const Intrinsics& camera, LocateConfig* cfg);
 
+// Whether any key of `user` follows the frame (its noise or pixel footprint): only then is the
+// frame's noise measured.
+bool derives_from_frame(const LocateConfig& user);
+
 // The largest refine_inlier_mm set_frame_thresholds gives for this D (the model index is built
 // for it at start-up).
 float max_refine_inlier_mm(const LocateConfig& user, float tube_d_mm);
