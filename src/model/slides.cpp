@@ -1,0 +1,153 @@
+#include "model/slides.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <queue>
+
+#include "model/neighbors.hpp"
+
+namespace pipeloc {
+namespace {
+
+constexpr std::size_t kMaxCentrePoints = 4000;  // enough for a few points per mm of any pipe
+constexpr int kMaxNeighbours = 48;
+constexpr float kLinkOfD = 0.5f;   // centre points this close are neighbours along the tube
+constexpr float kStepOfD = 0.25f;  // the polyline's step
+constexpr float kMinReached = 0.9f;  // of the centre points: fewer and the cloud is not one tube
+constexpr std::size_t kLandingSamples = 1500;
+// A slide moves the centreline onto itself within this share of D: the slid surface then lies
+// within a fraction of a pixel's footprint of the original for any pipe a sensor sees several
+// pixels wide, and only the ends tell the two apart. (Arcs and straight runs: under 0.02 D; the
+// zoo's coils 0.02-0.04 D; a fat elbow, an S or a long planar bend 0.04-0.08 D; a U or Z over 0.2 D.)
+constexpr float kCentrelineRmsOfD = 0.03f;
+
+// Distances through the cloud from `from` along links shorter than link_mm (Dijkstra).
+std::vector<float> distances_through(const std::vector<Eigen::Vector3f>& pts, const KdTree3& tree, int from,
+                                     float link_mm) {
+  std::vector<float> dist(pts.size(), std::numeric_limits<float>::infinity());
+  using Item = std::pair<float, int>;
+  std::priority_queue<Item, std::vector<Item>, std::greater<Item>> open;
+  dist[std::size_t(from)] = 0;
+  open.push({0.0f, from});
+  int idx[kMaxNeighbours];
+  float d2[kMaxNeighbours];
+  while (!open.empty()) {
+    const auto [d, at] = open.top();
+    open.pop();
+    if (d > dist[std::size_t(at)]) continue;
+    const int found = tree.radius(pts[std::size_t(at)], link_mm, idx, d2, kMaxNeighbours);
+    for (int k = 0; k < found; ++k) {
+      const float nd = d + std::sqrt(d2[k]);
+      if (nd < dist[std::size_t(idx[k])]) dist[std::size_t(idx[k])] = nd, open.push({nd, idx[k]});
+    }
+  }
+  return dist;
+}
+
+int farthest_reached(const std::vector<float>& dist) {
+  int best = 0;
+  for (std::size_t i = 0; i < dist.size(); ++i)
+    if (std::isfinite(dist[i]) && dist[i] > dist[std::size_t(best)]) best = int(i);
+  return best;
+}
+
+// The share of `surface` samples that land within tolerance_mm of a sample after `m`.
+float landing_share(const SurfaceSamples& surface, const KdTree3& tree, const Pose& m, float tolerance_mm) {
+  const std::size_t stride = std::max<std::size_t>(1, surface.points.size() / kLandingSamples);
+  int within = 0, n = 0;
+  for (std::size_t i = 0; i < surface.points.size(); i += stride, ++n) {
+    int idx = 0;
+    float d2 = 0;
+    tree.nearest((m * surface.points[i].cast<double>()).cast<float>(), &idx, &d2, 64);
+    within += d2 <= tolerance_mm * tolerance_mm;
+  }
+  return n > 0 ? float(within) / float(n) : 0.0f;
+}
+
+}  // namespace
+
+Centreline centreline_of(const SurfaceSamples& surface, float d) {
+  Centreline out;
+  if (surface.points.size() < 10 || !(d > 0)) return out;
+  const std::size_t stride = std::max<std::size_t>(1, surface.points.size() / kMaxCentrePoints);
+  std::vector<Eigen::Vector3f> centres;
+  for (std::size_t i = 0; i < surface.points.size(); i += stride)
+    centres.push_back(surface.points[i] - 0.5f * d * surface.normals[i]);
+  KdTree3 tree;
+  tree.build(centres.data(), centres.size());
+  const float link = kLinkOfD * d;
+  // From an end: the point farthest through the cloud from any point is one.
+  const int end = farthest_reached(distances_through(centres, tree, 0, link));
+  const std::vector<float> along = distances_through(centres, tree, end, link);
+  // Binned along the distance and averaged (the links zig-zag: the bins' own spacing is the length).
+  const float bin = std::max(0.5f, kStepOfD * d);
+  float longest = 0;
+  std::size_t reached = 0;
+  for (float a : along)
+    if (std::isfinite(a)) longest = std::max(longest, a), ++reached;
+  if (float(reached) < kMinReached * float(centres.size())) return out;
+  const std::size_t bins = std::size_t(longest / bin) + 1;
+  std::vector<Eigen::Vector3f> sum(bins, Eigen::Vector3f::Zero());
+  std::vector<int> count(bins, 0);
+  for (std::size_t i = 0; i < centres.size(); ++i) {
+    if (!std::isfinite(along[i])) continue;
+    const std::size_t b = std::min(bins - 1, std::size_t(along[i] / bin));
+    sum[b] += centres[i], ++count[b];
+  }
+  std::vector<Eigen::Vector3f> coarse;
+  for (std::size_t b = 0; b < bins; ++b)
+    if (count[b] > 0) coarse.push_back(sum[b] / float(count[b]));
+  if (coarse.size() < 2) return out;
+  // Resampled at equal steps of its own length.
+  out.step_mm = bin;
+  out.points.push_back(coarse[0]);
+  float carried = 0;  // length walked since the last point written
+  for (std::size_t i = 1; i < coarse.size(); ++i) {
+    const Eigen::Vector3f a = coarse[i - 1], b = coarse[i];
+    const float seg = (b - a).norm();
+    float at = bin - carried;
+    while (at <= seg) {
+      out.points.push_back(a + (b - a) * (at / seg));
+      at += bin;
+    }
+    carried = seg - (at - bin);
+  }
+  return out;
+}
+
+std::vector<Slide> find_slides(const SurfaceSamples& surface, float d, const std::vector<float>& arc_mm,
+                               float tolerance_mm, float min_share) {
+  std::vector<Slide> found;
+  const Centreline line = centreline_of(surface, d);
+  const int n = int(line.points.size());
+  if (n < 4) return found;
+  KdTree3 tree;
+  tree.build(surface.points.data(), surface.points.size());
+  for (float s : arc_mm) {
+    const int k = int(std::lround(s / line.step_mm));
+    if (k <= 0 || n - k < 3) continue;
+    for (int sign : {1, -1}) {
+      // Pairs: the centreline onto itself moved by s (by -s: the same pairs the other way).
+      Eigen::Matrix3Xd from(3, n - k), to(3, n - k);
+      for (int i = 0; i + k < n; ++i) {
+        const Eigen::Vector3d a = line.points[std::size_t(i)].cast<double>();
+        const Eigen::Vector3d b = line.points[std::size_t(i + k)].cast<double>();
+        from.col(i) = sign > 0 ? a : b, to.col(i) = sign > 0 ? b : a;
+      }
+      Pose m;
+      m.matrix() = Eigen::umeyama(from, to, false);
+      if (!m.matrix().allFinite()) continue;
+      m.linear() = nearest_rotation(m.linear());
+      const float share = landing_share(surface, tree, m, tolerance_mm);
+      double sq = 0;
+      for (int i = 0; i < n - k; ++i) sq += (m * from.col(i) - to.col(i)).squaredNorm();
+      const float rms = float(std::sqrt(sq / double(n - k)));
+      if (share >= min_share && rms <= kCentrelineRmsOfD * d) found.push_back({m, float(sign) * float(k) * line.step_mm, share, rms});
+    }
+  }
+  return found;
+}
+
+}  // namespace pipeloc

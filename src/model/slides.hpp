@@ -1,0 +1,38 @@
+// Beyond the paper: a pipe's slides along itself. An arc turned about its own centre, a coil
+// screwed along its helix, a straight run moved along its axis: most of the surface lands on
+// itself, and a view that hides the ends fits both poses. These motions are found from the
+// model's centreline, so the localizer can judge the slid pose beside the one it found.
+#pragma once
+
+#include <vector>
+
+#include "core/pose.hpp"
+#include "model/pipe_model.hpp"
+
+namespace pipeloc {
+
+// The tube's centreline as a polyline ordered by arc length from one end, in steps of step_mm:
+// each surface sample moved half a diameter inwards along its normal, ordered by the distance
+// through the cloud of those points from its farthest end.
+struct Centreline {
+  std::vector<Eigen::Vector3f> points;
+  float step_mm = 0;
+  float length_mm() const { return points.size() < 2 ? 0.0f : step_mm * float(points.size() - 1); }
+};
+Centreline centreline_of(const SurfaceSamples& surface, float tube_d_mm);
+
+struct Slide {
+  Pose motion;            // model frame to model frame
+  float arc_mm = 0;       // how far along the centreline it moves (signed)
+  float landing_share = 0;  // of the surface samples within the tolerance of the surface after it
+  float centreline_rms_mm = 0;  // of the centreline's overlapping part from itself moved
+};
+
+// For each arc length s (mm, both signs), the rigid motion taking the centreline onto itself moved
+// by s (least squares over the part that overlaps); kept when at least min_share of the surface
+// samples land within tolerance_mm of the surface and the centreline lands on itself within 3 % of
+// D (model/slides.cpp). None for a part whose shape changes along it.
+std::vector<Slide> find_slides(const SurfaceSamples& surface, float tube_d_mm, const std::vector<float>& arc_mm,
+                               float tolerance_mm, float min_share);
+
+}  // namespace pipeloc
