@@ -27,6 +27,13 @@ inline double pose_error(const PipeModel& m, const Pose& a, const Pose& b) {
   return mssd(v, a, b, m.symmetries, 1e9);
 }
 
+// The same, a straight tube's turns about its own axis counted as symmetries (as the scorer does).
+inline double pose_error_with_turns(const PipeModel& m, const Pose& a, const Pose& b) {
+  std::vector<Eigen::Vector3d> v;
+  for (const auto& p : m.mesh.vertices) v.push_back(p.cast<double>());
+  return mssd(v, a, b, with_tube_turns(v, m.symmetries), 1e9);
+}
+
 // Fills a Z-buffer with z = f(x, y) on a 1 mm grid.
 template <typename F>
 ZBuffer synthetic_zbuffer(int size, F f) {

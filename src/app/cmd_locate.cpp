@@ -142,7 +142,7 @@ void add_locate(CLI::App& app) {
 
 void add_eval_bop(CLI::App& app) {
   struct Options {
-    std::string dataset, out, config, match = "zridge", overlays, picks;
+    std::string dataset, out, config, match = "zridge", search = "default", overlays, picks;
     double budget_ms = 0;
   };
   auto opt = std::make_shared<Options>();
@@ -152,6 +152,10 @@ void add_eval_bop(CLI::App& app) {
   cmd->add_option("--config", opt->config, "TOML config ([locate] thresholds)");
   cmd->add_option("--match", opt->match, "zridge (the paper) or surface (whole visible surface)")
       ->check(CLI::IsMember({"zridge", "surface"}));
+  cmd->add_option("--search", opt->search,
+                  "default (beyond the paper) or paper (IV-B's 12 starts at the measured centre, no yaw turns, "
+                  "no sliding)")
+      ->check(CLI::IsMember({"default", "paper"}));
   cmd->add_option("--overlays", opt->overlays, "also write an overlay PNG per image into this directory");
   cmd->add_option("--picks", opt->picks,
                   "also write the pose the service would hand out per image (the first pickable; no row = "
@@ -162,6 +166,7 @@ void add_eval_bop(CLI::App& app) {
   cmd->callback([opt] {
     LocateConfig cfg = config_or_default(opt->config).locate;
     cfg.match_surface = opt->match == "surface";
+    if (opt->search == "paper") use_paper_search(&cfg);
     const auto targets = read_targets(opt->dataset + "/test_targets_bop19.json");
     std::map<int, std::unique_ptr<PipeModel>> models;
     std::map<int, std::unique_ptr<Locator>> locators;

@@ -194,6 +194,7 @@ void read_locate(Section& s, LocateConfig* c) {
   s.integer("initial_rotations", &c->initial_rotations, 1, 12, "states per direction");
   s.real("initial_yaw_step_deg", &c->initial_yaw_step_deg, 1, 180, "deg");
   s.real("start_slide_step_of_d", &c->start_slide_step_of_d, 0.1, 10, "x D");
+  s.boolean("slide_starts", &c->slide_starts);
   s.integer("icp_max_iterations", &c->icp_max_iterations, 1, 500, "iterations");
   s.integer("icp_probed_states", &c->icp_probed_states, 1, 10000, "states");
   s.integer("icp_probe_iterations", &c->icp_probe_iterations, 1, 500, "iterations");
@@ -214,13 +215,17 @@ void read_locate(Section& s, LocateConfig* c) {
   s.real("ambiguity_pose_mm", &c->ambiguity_pose_mm, 0, 1000, "mm");
   s.real("ambiguity_quality_margin", &c->ambiguity_quality_margin, 0, 1, "share");
   s.integer("verify_hypotheses", &c->verify_hypotheses, 1, 24, "fits per region");
+  s.boolean("judge_slides", &c->judge_slides);
   s.integer("max_candidates", &c->max_candidates, 1, 256, "regions");
   s.integer("max_results", &c->max_results, 1, 256, "poses");
   s.integer("threads", &c->threads, 1, 64, "threads");
+  std::string search = "default";
+  s.text("search", &search, {"default", "paper"});
   read_roi(s, &c->roi);
   s.finish();
   if (c->section_width_min_of_d >= c->section_width_max_of_d)
     fail(s.file(), "locate.section_width_min_of_d", "must be below locate.section_width_max_of_d");
+  if (search == "paper") use_paper_search(c);
 }
 
 void read_model(Section& s, const std::string& file, ModelConfig* m) {

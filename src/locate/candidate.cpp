@@ -272,11 +272,11 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
     e.candidate = in.index;
     const float q = hypothesis_quality(e.check);
     if (!have_best || q > hypothesis_quality(best.check)) {
-      if (have_best && pose_distance_mm(lm, best.model_to_bin, e.model_to_bin, ambiguity_mm) > ambiguity_mm)
+      if (have_best && pick_distance_mm(lm, best.model_to_bin, e.model_to_bin, ambiguity_mm) > ambiguity_mm)
         second = best, have_second = true;
       best = e, have_best = true;
     } else if (!have_second || q > hypothesis_quality(second.check)) {
-      if (pose_distance_mm(lm, best.model_to_bin, e.model_to_bin, ambiguity_mm) > ambiguity_mm)
+      if (pick_distance_mm(lm, best.model_to_bin, e.model_to_bin, ambiguity_mm) > ambiguity_mm)
         second = e, have_second = true;
     }
   };
@@ -286,7 +286,7 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
     bool seen = false;
     for (std::size_t j = 0; j < i && !seen; ++j)
       seen = fits[j].cost_mm <= r_th &&
-             pose_distance_mm(lm, fits[i].pose, fits[j].pose, ambiguity_mm) < ambiguity_mm;
+             pick_distance_mm(lm, fits[i].pose, fits[j].pose, ambiguity_mm) < ambiguity_mm;
     if (seen) continue;
     if (deadline.passed()) return out;  // an unchecked runner-up could hide an ambiguity
     ++tried;
@@ -301,10 +301,19 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
     const float found_cost_mm = best.ridge_cost_mm;
     for (const Pose& half_turn : ctx.model.near_symmetries) {
       const Pose twin = found * half_turn;
-      if (have_second && pose_distance_mm(lm, twin, second.model_to_bin, ambiguity_mm) <= ambiguity_mm)
+      if (have_second && pick_distance_mm(lm, twin, second.model_to_bin, ambiguity_mm) <= ambiguity_mm)
         continue;
       if (deadline.passed()) return out;
       judge(twin, found_cost_mm);
+    }
+    // Beyond the paper: a pipe slid along itself (an arc about its centre, a coil along its helix)
+    // shows the same surface wherever its ends are not seen: the slid poses are rivals too.
+    for (const Pose& slide : lm.slides) {
+      const Pose slid = found * slide;
+      if (have_second && pick_distance_mm(lm, slid, second.model_to_bin, ambiguity_mm) <= ambiguity_mm)
+        continue;
+      if (deadline.passed()) return out;
+      judge(slid, found_cost_mm);
     }
   }
   out.complete = true;

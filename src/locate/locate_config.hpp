@@ -58,6 +58,7 @@ struct LocateConfig {
   double initial_yaw_step_deg = 30;  // each start also turned about the vertical in these steps (180: not)
   double start_slide_step_of_d =
       1.0;  // initial states slid in steps of this * D across the axis, twice along
+  bool slide_starts = true;  // beyond the paper: each start slid to where its ridge covers the observed one
   int icp_max_iterations = 24;
   int icp_probed_states = 48;      // of the slid starts, the best this many (by ridge cover) are probed
                                    // (72 = all of 2 x 6 turns x 6 yaws; fewer trade recall for time),
@@ -83,6 +84,8 @@ struct LocateConfig {
   int verify_hypotheses = 3;               // distinct ridge fits refined and checked per region
   double ambiguity_pose_mm = 10;           // two fits further apart than this (MSSD) ...
   double ambiguity_quality_margin = 0.05;  // ... both confirmed within this margin: ambiguous
+  bool judge_slides = true;  // the found pose slid along the pipe itself (an arc about its centre,
+                             // a coil along its helix, a straight run along its axis) is a rival too
 
   // The paper's comparison: ICP on points sampled from the whole visible surface instead of the
   // Z-ridge (eval-bop --match surface).
@@ -93,5 +96,17 @@ struct LocateConfig {
   int max_results = 16;
   int threads = 2;
 };
+
+// The paper's search (IV-B): its six turns in both directions at the measured centre, every one
+// run to convergence, no turns about the vertical, no sliding, no slid rivals. The checks after
+// the search (refinement, verification, ambiguity) stay. `--search paper` / [locate] search.
+inline void use_paper_search(LocateConfig* c) {
+  c->initial_rotations = 6;
+  c->initial_yaw_step_deg = 180;
+  c->slide_starts = false;
+  c->icp_probed_states = 2 * c->initial_rotations;
+  c->icp_continued_states = 2 * c->initial_rotations;
+  c->judge_slides = false;
+}
 
 }  // namespace pipeloc

@@ -8,6 +8,7 @@
 
 #include "locate/locate_config.hpp"
 #include "locate/principal_axis.hpp"
+#include "model/slides.hpp"
 #include "render/raster.hpp"
 
 namespace pipeloc {
@@ -102,6 +103,20 @@ LocatorModel prepare_locator_model(const PipeModel& model, float margin_mm, cons
   const std::size_t vstride = std::max<std::size_t>(1, model.mesh.vertices.size() / 64);
   for (std::size_t i = 0; i < model.mesh.vertices.size(); i += vstride)
     lm.check_points.push_back(model.mesh.vertices[i]);
+  const Centreline centreline = centreline_of(model.surface, lm.tube_d_mm);
+  constexpr std::size_t kCentrelinePoints = 64;
+  const std::size_t cstride = std::max<std::size_t>(1, centreline.points.size() / kCentrelinePoints);
+  for (std::size_t i = 0; i < centreline.points.size(); i += cstride)
+    lm.centreline_points.push_back(centreline.points[i]);
+  if (!centreline.points.empty()) lm.centreline_points.push_back(centreline.points.back());
+  if (lm.centreline_points.size() >= 2) {
+    const Eigen::Vector3f a = lm.centreline_points.front(), b = lm.centreline_points.back();
+    const Eigen::Vector3f u = (b - a).normalized();
+    constexpr float kStraightOfD = 0.1f;
+    float off = 0;
+    for (const auto& p : lm.centreline_points) off = std::max(off, ((p - a) - (p - a).dot(u) * u).norm());
+    lm.straight = (b - a).norm() > lm.tube_d_mm && off <= kStraightOfD * lm.tube_d_mm;
+  }
 
   // Voxel index by multi-source breadth-first propagation from each sample's voxel.
   Eigen::Vector3f lo = pts[0], hi = pts[0];
@@ -175,6 +190,17 @@ LocatorModel prepare_locator_model(const PipeModel& model, float margin_mm, cons
     lm.canonical_starts.push_back(canonical_start(
         model, Eigen::AngleAxisd(2 * M_PI * k / turns, Eigen::Vector3d::UnitX()).toRotationMatrix() * lying,
         cfg));
+  if (cfg.judge_slides) {
+    // Slides just beyond the ambiguity distance are the hardest to tell apart; longer ones are
+    // judged too (a pose 5-45 mm along an arc was handed out as a pick before this check). The
+    // tolerance and share are those of the near symmetries: a quarter of D, 60 % of the surface.
+    const ModelDerivation near;
+    const float step = float(std::max(cfg.ambiguity_pose_mm, 0.5 * double(lm.tube_d_mm)));
+    for (const Slide& s : find_slides(model.surface, lm.tube_d_mm, {1.5f * step, 3.0f * step, 5.0f * step},
+                                      near.near_symmetry_tolerance_of_diameter * lm.tube_d_mm,
+                                      near.near_symmetry_min_share))
+      lm.slides.push_back(s.motion);
+  }
   return lm;
 }
 
@@ -183,14 +209,19 @@ int ridge_sample_stride(float cell_mm, const LocateConfig& cfg) {
   return per_side * per_side;
 }
 
-float pose_distance_mm(const LocatorModel& lm, const Pose& a, const Pose& b, float bound_mm) {
+namespace {
+
+// The largest distance between a point of `points` under a and under b (under b composed with
+// each symmetry, the least), cut short beyond bound_mm.
+float points_distance_mm(const LocatorModel& lm, const std::vector<Eigen::Vector3f>& points, const Pose& a,
+                         const Pose& b, float bound_mm) {
   const Eigen::Matrix4f ma = a.matrix().cast<float>();
   // A squared distance above this has a square root above bound_mm, rounding included.
   const float cut_sq = bound_mm * bound_mm * (1 + 1e-5f);
   // The worst squared distance for mb, or (cut short) one above cut_sq.
   auto worst_for = [&](const Eigen::Matrix4f& mb) {
     float worst = 0;
-    for (const auto& p : lm.check_points) {
+    for (const auto& p : points) {
       const Eigen::Vector3f d = (ma.topLeftCorner<3, 3>() - mb.topLeftCorner<3, 3>()) * p +
                                 (ma.topRightCorner<3, 1>() - mb.topRightCorner<3, 1>());
       worst = std::max(worst, d.squaredNorm());
@@ -201,6 +232,17 @@ float pose_distance_mm(const LocatorModel& lm, const Pose& a, const Pose& b, flo
   float best = worst_for(b.matrix().cast<float>());
   for (const auto& s : lm.model->symmetries) best = std::min(best, worst_for((b * s).matrix().cast<float>()));
   return best;
+}
+
+}  // namespace
+
+float pose_distance_mm(const LocatorModel& lm, const Pose& a, const Pose& b, float bound_mm) {
+  return points_distance_mm(lm, lm.check_points, a, b, bound_mm);
+}
+
+float pick_distance_mm(const LocatorModel& lm, const Pose& a, const Pose& b, float bound_mm) {
+  return points_distance_mm(lm, lm.centreline_points.empty() ? lm.check_points : lm.centreline_points, a, b,
+                            bound_mm);
 }
 
 }  // namespace pipeloc

@@ -27,6 +27,12 @@ struct LocatorModel {
     return nullptr;
   }
   std::vector<Eigen::Vector3f> check_points;  // vertices spread over the part, for pose distances
+  // Points along the tube's centreline (model/slides.hpp), for pick distances: a pipe turned
+  // about its own straight axis is the same pick. Empty when no centreline was found.
+  std::vector<Eigen::Vector3f> centreline_points;
+  // A straight tube (its centreline within D/10 of a line): turned about its own axis it is the
+  // same, and the ridge ICP leaves that turn out (locate/rigid_fit.hpp).
+  bool straight = false;
   // The mesh verification renders: vertices merged on a grid of D/8 (within a pixel's footprint at
   // the bin's depth, several times fewer triangles to draw per hypothesis).
   Mesh verify_mesh;
@@ -41,6 +47,9 @@ struct LocatorModel {
   // placed so that its principal direction measured by III (the same cross-section count as on
   // the observed region, on its own top view) lies along +X and its measured centre at the origin.
   std::vector<Pose> canonical_starts;
+  // Beyond the paper: the model's slides along itself (model/slides.hpp) by more than the
+  // ambiguity distance; the pose found, slid, is judged as a rival (off: judge_slides = false).
+  std::vector<Pose> slides;
   // Beyond the paper: the principal direction of a partly hidden curved pipe can be far from that
   // of the whole model, so each start is also turned about the vertical, in steps covering half a
   // turn (the reversed direction covers the other half).
@@ -84,6 +93,9 @@ AxisEstimate top_view_axis(const PipeModel& model, const Pose& model_to_bin, con
 // Largest distance of the check points between two poses, minimised over the model's symmetries.
 // Exact up to `bound_mm`; a distance beyond it may be cut short, returning some value beyond it
 // (a caller comparing with bound_mm gets the same answer, sooner).
+// How far apart two poses put the tube's centreline (the pick), the model's symmetries taken into
+// account; pose_distance_mm where no centreline was found. Beyond bound_mm, some value beyond it.
+float pick_distance_mm(const LocatorModel& lm, const Pose& a, const Pose& b, float bound_mm);
 float pose_distance_mm(const LocatorModel& lm, const Pose& a, const Pose& b,
                        float bound_mm = std::numeric_limits<float>::infinity());
 

@@ -109,7 +109,7 @@ RidgeFit RidgeIcp::iterate(const IcpStart& start, const RidgeView& observed, int
       ++pairs;
     }
     if (pairs < kMinPairs) break;
-    const Pose delta = fit_rigid(src_.data(), dst_.data(), pairs);  // 2.2.3
+    const Pose delta = fit_rigid(src_.data(), dst_.data(), pairs, lm.straight);  // 2.2.3
     fit.pose = delta * fit.pose;
     gate = std::max(0.5f * d, gate * kGateShrink);
     const double moved =

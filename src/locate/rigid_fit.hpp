@@ -6,6 +6,8 @@
 namespace pipeloc {
 
 // Rigid transform taking src onto dst in the least-squares sense (Kabsch), fixed-size maths.
-Pose fit_rigid(const Eigen::Vector3f* src, const Eigen::Vector3f* dst, int n);
+// With `no_roll_on_line`, points lying along a line give no turn about that line (a straight
+// tube's ridge: the turn would be the noise's, and roll the tube off its own top line).
+Pose fit_rigid(const Eigen::Vector3f* src, const Eigen::Vector3f* dst, int n, bool no_roll_on_line = false);
 
 }  // namespace pipeloc
