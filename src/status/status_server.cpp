@@ -73,6 +73,11 @@ StatusServer::StatusServer(const StatusConfig& cfg, const StatusBoard& board, St
   httplib::Server& s = *server_;
   s.new_task_queue = [] { return new StatusWorkers(2); };
   s.set_keep_alive_max_count(1);
+  // httplib's default adds SO_REUSEPORT: a second pipeloc would then share the port unnoticed.
+  s.set_socket_options([](socket_t sock) {
+    const int yes = 1;
+    setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
+  });
   s.set_read_timeout(2, 0);
   s.set_write_timeout(2, 0);
   s.Get("/", [this](const httplib::Request&, httplib::Response& res) {

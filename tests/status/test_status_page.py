@@ -166,6 +166,16 @@ refresh_s = 2
         w, h, _ = decode_png(body)
         self.assertEqual((w, h), (640, 480))  # the sim's camera
 
+    def test_port_taken_is_a_start_up_error(self):
+        with open(self.svc.config) as f:
+            text = f.read().replace(f"port = {PORT}\n", f"port = {PORT + 2000}\n")
+        config = os.path.join(self.svc.dir, "second.toml")
+        with open(config, "w") as f:
+            f.write(text)
+        r = subprocess.run([BINARY, "serve", "--config", config], capture_output=True, text=True, timeout=60)
+        self.assertEqual(r.returncode, 2, r.stderr)
+        self.assertIn(f"status: cannot listen on 127.0.0.1:{HTTP}", r.stderr)
+
     def test_page_in_headless_chromium(self):
         chromium = shutil.which("chromium") or shutil.which("chromium-browser")
         self.assertIsNotNone(chromium, "chromium not installed (tools/setup installs it)")
