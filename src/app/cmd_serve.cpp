@@ -14,6 +14,7 @@
 #include "service/cycle_runner.hpp"
 #include "service/sd_notify.hpp"
 #include "service/service.hpp"
+#include "status/status_server.hpp"
 
 namespace pipeloc::app {
 namespace {
@@ -57,14 +58,19 @@ struct Options {
   int trigger_ms = 0;  // plc.mode "none": LOCATE every this many ms
 };
 
-// HEARTBEAT every 250 ms and the systemd watchdog every WatchdogSec/3, while the cycle is healthy.
+// HEARTBEAT every 250 ms and the systemd watchdog every WatchdogSec/3, while the cycle is healthy;
+// the status page learns the heartbeat count and the PLC's connections at the same pace.
 class Pulse {
  public:
-  void beat(PlcLink& link, bool healthy) {
+  void beat(PlcLink& link, bool healthy, StatusBoard* board) {
     const auto now = Clock::now();
     if (now >= next_heartbeat_) {
       next_heartbeat_ = now + std::chrono::milliseconds(250);
-      if (healthy) link.heartbeat();
+      if (healthy) link.heartbeat(), ++beats_;
+      if (board) {
+        PlcClientInfo clients[StatusSnapshot::kClients];
+        board->publish_link(beats_, healthy, clients, link.client_list(clients, StatusSnapshot::kClients));
+      }
     }
     if (watchdog_ms_ > 0 && now >= next_watchdog_ && healthy) {
       next_watchdog_ = now + std::chrono::milliseconds(watchdog_ms_ / 3);
@@ -74,6 +80,7 @@ class Pulse {
 
  private:
   long watchdog_ms_ = sd_watchdog_ms();
+  std::uint64_t beats_ = 0;
   Clock::time_point next_heartbeat_ = Clock::now(), next_watchdog_ = Clock::now();
 };
 
@@ -98,6 +105,25 @@ int serve(const Options& opt) {
                cfg.log.keep_files);
   std::unique_ptr<PlcLink> link = open_plc_link(cfg.plc, opt.trigger_ms);
   spdlog::info("plc: {}", link->describe());
+  StatusBoard board;
+  std::unique_ptr<StatusServer> status;
+  if (cfg.status.enabled) {
+    StatusInfo info;
+    char model_text[256];
+    std::snprintf(model_text, sizeof model_text, "%s: tube diameter D %.1f mm, longest extent L %.1f mm",
+                  model.source.c_str(), model.tube_diameter_mm, model.extent_mm);
+    info.model = model_text;
+    info.source = service.source().describe();
+    info.plc = link->describe();
+    info.config_path = cfg.path;
+    info.config = describe_config(cfg);
+    info.budget_ms = cfg.service.budget_ms;
+    info.refresh_s = cfg.status.refresh_s;
+    info.start_unix_ms = unix_ms_now();
+    service.set_status_board(&board);
+    status = std::make_unique<StatusServer>(cfg.status, board, std::move(info));
+    spdlog::info("status page: {} (also /metrics, /api/status, /overlay.png)", status->url());
+  }
   install_signal_handlers();
   CycleRunner runner(service);
   {
@@ -123,12 +149,13 @@ int serve(const Options& opt) {
       log_result(p);
       ++done;
     }
-    pulse.beat(*link, runner.healthy(2000));
+    pulse.beat(*link, runner.healthy(2000), status ? &board : nullptr);
   }
   // deactivate
   sd_notify_send("STOPPING=1");
-  spdlog::info("stopping: {}", g_stop ? strsignal(g_signal.load())
-                               : runner.failed() ? "the cycle thread failed" : "cycle count reached");
+  spdlog::info("stopping: {}", g_stop            ? strsignal(g_signal.load())
+                               : runner.failed() ? "the cycle thread failed"
+                                                 : "cycle count reached");
   runner.stop();
   Published p;
   while (runner.take_result(&p)) {

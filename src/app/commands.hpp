@@ -17,6 +17,7 @@ void add_record(CLI::App& app);
 void add_timing_report(CLI::App& app);
 void add_calibrate_bin(CLI::App& app);
 void add_calibrate_hand_eye(CLI::App& app);
+void add_plot_budget(CLI::App& app);
 
 // Exit status a callback asks for (0 unless set).
 int& exit_status();

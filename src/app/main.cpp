@@ -32,6 +32,7 @@ int main(int argc, char** argv) {
   pipeloc::app::add_timing_report(app);
   pipeloc::app::add_calibrate_bin(app);
   pipeloc::app::add_calibrate_hand_eye(app);
+  pipeloc::app::add_plot_budget(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -326,8 +326,8 @@ void read_plc(Section& s, PlcConfig* p) {
   s.text("address", &p->address, {}, false);
   if (!is_ipv4_address(p->address))
     fail(s.file(), s.full("address"),
-         "expected an IPv4 address such as \"127.0.0.1\" or \"0.0.0.0\" (all interfaces), got \"" + p->address +
-             "\" (host names are not resolved)");
+         "expected an IPv4 address such as \"127.0.0.1\" or \"0.0.0.0\" (all interfaces), got \"" +
+             p->address + "\" (host names are not resolved)");
   s.integer("port", &p->port, 1, 65535, "");
   s.integer("base", &p->base, 0, 65535 - reg::kSize, "register");
   s.integer("unit_id", &p->unit_id, 0, 255, "");
@@ -350,19 +350,35 @@ void read_plc(Section& s, PlcConfig* p) {
   s.numbers("robot_from_camera", &p->robot_from_camera, 16, "4x4 row-major, mm");
   if (!p->robot_from_camera.empty()) {
     const std::string why = rigid_transform_problem(p->robot_from_camera.data());
-    if (!why.empty()) fail(s.file(), s.full("robot_from_camera"), "expected a rigid transform (rotation and translation): " + why);
+    if (!why.empty())
+      fail(s.file(), s.full("robot_from_camera"),
+           "expected a rigid transform (rotation and translation): " + why);
   }
   s.finish();
 }
 
+void read_status(Section& s, StatusConfig* c) {
+  s.boolean("enabled", &c->enabled);
+  s.text("address", &c->address, {}, false);
+  if (!is_ipv4_address(c->address))
+    fail(s.file(), s.full("address"),
+         "expected an IPv4 address such as \"127.0.0.1\" (this machine only) or \"0.0.0.0\" (every "
+         "interface), got \"" +
+             c->address + "\"");
+  s.integer("port", &c->port, 0, 65535, "TCP port (0: any free one)");
+  s.integer("overlay_every", &c->overlay_every, 0, 1000000, "LOCATE cycles (0 = no overlay on the page)");
+  s.integer("refresh_s", &c->refresh_s, 1, 3600, "s");
+  s.finish();
+}
+
 void read_all(const std::string& file, const toml::table& root, AppConfig* cfg) {
-  static const char* const kSections[] = {"model", "locate", "source", "service", "plc", "log"};
+  static const char* const kSections[] = {"model", "locate", "source", "service", "plc", "log", "status"};
   for (const auto& [key, node] : root) {
     bool known = false;
     for (const char* s : kSections) known = known || key.str() == s;
     if (!known)
       fail(file, std::string(key.str()),
-           "unknown section (expected [model], [locate], [source], [service], [plc] or [log])");
+           "unknown section (expected [model], [locate], [source], [service], [plc], [log] or [status])");
     if (!node.is_table())
       fail(file, std::string(key.str()), "expected a [" + std::string(key.str()) + "] table");
   }
@@ -392,6 +408,9 @@ void read_all(const std::string& file, const toml::table& root, AppConfig* cfg) 
   log.integer("keep_files", &cfg->log.keep_files, 1, 1000, "files");
   log.integer("overlay_every", &cfg->log.overlay_every, 0, 1000000, "LOCATE cycles (0 = never)");
   log.finish();
+
+  Section status(file, "status", table("status"), eff);
+  read_status(status, &cfg->status);
 }
 
 }  // namespace

@@ -66,17 +66,17 @@ struct PlcConfig {
   std::string mode = "server";  // server | client | none
   std::string address = "127.0.0.1";
   int port = 1502;
-  int base = 0;                 // first holding register of the map
-  int unit_id = 1;              // client mode: the PLC's unit identifier
-  int max_clients = 8;          // server mode: connections served at once
-  int request_timeout_ms = 500;  // server mode: a request not complete this long after its
-                                 // first byte closes its connection
-  int idle_timeout_ms = 60000;   // server mode: a connection without a request this long is closed
+  int base = 0;                            // first holding register of the map
+  int unit_id = 1;                         // client mode: the PLC's unit identifier
+  int max_clients = 8;                     // server mode: connections served at once
+  int request_timeout_ms = 500;            // server mode: a request not complete this long after its
+                                           // first byte closes its connection
+  int idle_timeout_ms = 60000;             // server mode: a connection without a request this long is closed
   std::vector<std::string> plc_addresses;  // server mode: the PLC's IPv4 addresses (never evicted
                                            // for another client)
-  int poll_ms = 50;             // client mode: how often CMD/REQ_ID are read
-  int reconnect_max_ms = 5000;  // client mode: backoff cap
-  int byte_timeout_ms = 100;    // client mode: the PLC's reply may pause this long between bytes
+  int poll_ms = 50;                        // client mode: how often CMD/REQ_ID are read
+  int reconnect_max_ms = 5000;             // client mode: backoff cap
+  int byte_timeout_ms = 100;               // client mode: the PLC's reply may pause this long between bytes
   reg::Encoding encoding;
   EulerConvention euler = EulerConvention::zyx;
   std::vector<double> robot_from_camera;  // optional 16 values, row-major, mm: hand-eye
@@ -89,6 +89,15 @@ struct LogConfig {
   int overlay_every = 0;            // every N-th LOCATE: overlay-latest.png in dir (0 = never)
 };
 
+// The status page and /metrics (src/status): off unless enabled; served on a thread of its own.
+struct StatusConfig {
+  bool enabled = false;
+  std::string address = "127.0.0.1";  // IPv4; "0.0.0.0" serves every interface
+  int port = 8080;                    // 0: any free port (the log says which)
+  int overlay_every = 1;              // every N-th LOCATE's overlay is drawn for the page (0 = none)
+  int refresh_s = 3;                  // the page reloads itself this often
+};
+
 struct AppConfig {
   std::string path;        // the file it came from ("" = built-in defaults)
   std::string model_path;  // = model.stl resolved; kept for the offline commands
@@ -98,6 +107,7 @@ struct AppConfig {
   ServiceConfig service;
   PlcConfig plc;
   LogConfig log;
+  StatusConfig status;
   std::vector<std::string> effective;  // "section.key = value  # unit" for every value in effect
 };
 

@@ -82,10 +82,16 @@ Image<std::uint16_t> read_depth_png(const std::string& path) {
 
 namespace {
 
+void append_to_vector(png_structp png, png_bytep data, png_size_t length) {
+  auto* out = static_cast<std::vector<std::uint8_t>*>(png_get_io_ptr(png));
+  out->insert(out->end(), data, data + length);
+}
+
+// Into the file at `path`, or into `memory` when it is given (path then only names it in errors).
 void write_png(const std::string& path, int width, int height, int bit_depth, int color, int bytes_per_row,
-               const std::uint8_t* data, bool swap16) {
-  File file(std::fopen(path.c_str(), "wb"));
-  if (!file) throw IoError("PNG '" + path + "': cannot open for writing");
+               const std::uint8_t* data, bool swap16, std::vector<std::uint8_t>* memory = nullptr) {
+  File file(memory ? nullptr : std::fopen(path.c_str(), "wb"));
+  if (!memory && !file) throw IoError("PNG '" + path + "': cannot open for writing");
   ErrorSink sink;
   png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, &sink, on_error, on_warning);
   png_infop info = png ? png_create_info_struct(png) : nullptr;
@@ -96,7 +102,10 @@ void write_png(const std::string& path, int width, int height, int bit_depth, in
   std::vector<png_bytep> rows(height);
   for (int y = 0; y < height; ++y) rows[y] = const_cast<png_bytep>(data + std::size_t(y) * bytes_per_row);
   const bool ok = guarded(png, [&] {
-    png_init_io(png, file.get());
+    if (memory)
+      png_set_write_fn(png, memory, append_to_vector, nullptr);
+    else
+      png_init_io(png, file.get());
     png_set_IHDR(png, info, width, height, bit_depth, color, PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
                  PNG_FILTER_TYPE_DEFAULT);
     png_set_compression_level(png, 3);
@@ -120,6 +129,14 @@ void write_rgb_png(const std::string& path, const Image<Rgb>& image) {
   static_assert(sizeof(Rgb) == 3, "Rgb must be packed");
   write_png(path, image.width, image.height, 8, PNG_COLOR_TYPE_RGB, image.width * 3,
             reinterpret_cast<const std::uint8_t*>(image.pixels.data()), false);
+}
+
+std::vector<std::uint8_t> encode_rgb_png(const Image<Rgb>& image) {
+  std::vector<std::uint8_t> png;
+  png.reserve(std::size_t(image.width) * image.height);
+  write_png("(in memory)", image.width, image.height, 8, PNG_COLOR_TYPE_RGB, image.width * 3,
+            reinterpret_cast<const std::uint8_t*>(image.pixels.data()), false, &png);
+  return png;
 }
 
 }  // namespace pipeloc

@@ -22,5 +22,7 @@ struct Rgb {
 Image<std::uint16_t> read_depth_png(const std::string& path);
 void write_depth_png(const std::string& path, const Image<std::uint16_t>& depth);
 void write_rgb_png(const std::string& path, const Image<Rgb>& image);
+// The same PNG as bytes (for the status page).
+std::vector<std::uint8_t> encode_rgb_png(const Image<Rgb>& image);
 
 }  // namespace pipeloc

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cstdio>
 
 namespace pipeloc {
 
@@ -37,6 +38,8 @@ bool PlcClientLink::connect() {
     return false;
   }
   connected_ = true;
+  connected_at_ = last_read_ = Clock::now();
+  reads_ = 0;
   backoff_ms_ = 100;
   // Where the PLC stands: a result owed is written only if the PLC still waits for exactly it
   // (a restarted PLC must not see an old ACK_ID with an old pose); a REQ_ID it set while the
@@ -102,6 +105,17 @@ bool PlcClientLink::poll(int timeout_ms, int wake_fd, PlcRequest* req) {
   return round(req);
 }
 
+int PlcClientLink::client_list(PlcClientInfo* out, int max) const {
+  if (!connected_ || max < 1) return 0;
+  PlcClientInfo& info = out[0];
+  std::snprintf(info.ip, sizeof info.ip, "%s", cfg_.address.c_str());
+  info.plc = true;
+  info.requests = reads_;
+  info.connected = connected_at_;
+  info.last_request = last_read_;
+  return 1;
+}
+
 std::string PlcClientLink::describe() const {
   return "polling the PLC at " + cfg_.address + ":" + std::to_string(cfg_.port) + " every " +
          std::to_string(cfg_.poll_ms) + " ms, registers from " + std::to_string(cfg_.base);
@@ -118,6 +132,8 @@ bool PlcClientLink::round(PlcRequest* req) {
     disconnect("reading CMD/REQ_ID");
     return false;
   }
+  last_read_ = Clock::now();
+  ++reads_;
   if (cmd_req[1] == last_req_id_) return false;
   last_req_id_ = cmd_req[1];
   req->command = cmd_req[0];

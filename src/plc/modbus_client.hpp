@@ -30,6 +30,8 @@ class PlcClientLink : public PlcLink {
   void heartbeat() override;
   std::string describe() const override;
   bool connected() const { return connected_; }
+  // The PLC, while connected (requests: CMD/REQ_ID reads on this connection).
+  int client_list(PlcClientInfo* out, int max) const override;
   long reconnects() const { return reconnects_; }
 
  private:
@@ -47,6 +49,8 @@ class PlcClientLink : public PlcLink {
   int backoff_ms_ = 100;
   long reconnects_ = 0;
   Clock::time_point next_attempt_{}, next_poll_{};
+  Clock::time_point connected_at_{}, last_read_{};
+  long reads_ = 0;
 };
 
 }  // namespace pipeloc

@@ -101,8 +101,23 @@ std::string ModbusServer::describe() const {
          std::to_string(cfg_.base) + ".." + std::to_string(cfg_.base + reg::kSize - 1) + ", " +
          word_order_name(cfg_.encoding.order) + (cfg_.encoding.scaled_int32 ? " scaled int32" : " float32") +
          ", up to " + std::to_string(cfg_.max_clients) + " clients" +
-         (cfg_.plc_addresses.empty() ? "" : ", the PLC at " + cfg_.plc_addresses.front() +
-                                                (cfg_.plc_addresses.size() > 1 ? " and others" : ""));
+         (cfg_.plc_addresses.empty() ? ""
+                                     : ", the PLC at " + cfg_.plc_addresses.front() +
+                                           (cfg_.plc_addresses.size() > 1 ? " and others" : ""));
+}
+
+int ModbusServer::client_list(PlcClientInfo* out, int max) const {
+  int n = 0;
+  for (const Connection& c : conns_) {
+    if (n >= max) break;
+    PlcClientInfo& info = out[n++];
+    std::memcpy(info.ip, c.ip, sizeof info.ip);
+    info.plc = c.plc;
+    info.requests = c.requests;
+    info.connected = c.connected;
+    info.last_request = c.last_request;
+  }
+  return n;
 }
 
 // Makes room for one more connection when every slot is taken: the connection quiet the longest
@@ -117,8 +132,9 @@ bool ModbusServer::admit(bool plc, Clock::time_point now) {
   auto quietest = [&](bool from_plc) {
     long best = -1;
     auto before = [](const Connection& a, const Connection& b) {
-      return a.requests != b.requests && (a.requests == 0 || b.requests == 0) ? a.requests == 0
-                                                                                : a.last_request < b.last_request;
+      return a.requests != b.requests && (a.requests == 0 || b.requests == 0)
+                 ? a.requests == 0
+                 : a.last_request < b.last_request;
     };
     for (std::size_t i = 0; i < conns_.size(); ++i)
       if (conns_[i].plc == from_plc && (best < 0 || before(conns_[i], conns_[std::size_t(best)])))
@@ -137,7 +153,8 @@ void ModbusServer::accept_clients(Clock::time_point now) {
   for (;;) {  // until EAGAIN: a burst of connects never waits in the backlog for the next round
     sockaddr_in addr{};
     socklen_t len = sizeof addr;
-    const int fd = ::accept4(listen_fd_, reinterpret_cast<sockaddr*>(&addr), &len, SOCK_NONBLOCK | SOCK_CLOEXEC);
+    const int fd =
+        ::accept4(listen_fd_, reinterpret_cast<sockaddr*>(&addr), &len, SOCK_NONBLOCK | SOCK_CLOEXEC);
     if (fd < 0) {
       if (errno == EINTR || errno == ECONNABORTED) continue;
       if (errno != EAGAIN && errno != EWOULDBLOCK && log_limit_.allow(now))
@@ -151,12 +168,13 @@ void ModbusServer::accept_clients(Clock::time_point now) {
     if (!admit(c.plc, now)) {
       ++counters_.refused;
       if (log_limit_.allow(now))
-        spdlog::warn("plc: refused {}: all {} connections are the PLC's (plc.max_clients)", c.ip, conns_.size());
+        spdlog::warn("plc: refused {}: all {} connections are the PLC's (plc.max_clients)", c.ip,
+                     conns_.size());
       ::close(fd);
       continue;
     }
     set_client_options(fd);
-    c.last_request = now;
+    c.connected = c.last_request = now;
     ++counters_.accepted;
     conns_.push_back(c);
     if (log_limit_.allow(now))

@@ -53,6 +53,7 @@ class ModbusServer : public PlcLink {
   void heartbeat() override;
   std::string describe() const override;
   int clients() const { return int(conns_.size()); }
+  int client_list(PlcClientInfo* out, int max) const override;
   int port() const { return port_; }
   const std::uint16_t* registers() const;
 
@@ -64,10 +65,10 @@ class ModbusServer : public PlcLink {
  private:
   struct Connection {
     int fd = -1;
-    bool plc = false;  // from one of plc.plc_addresses
-    int have = 0;      // bytes of the current request in buf
+    bool plc = false;   // from one of plc.plc_addresses
+    int have = 0;       // bytes of the current request in buf
     long requests = 0;  // answered on this connection
-    Clock::time_point last_request{}, request_started{};
+    Clock::time_point connected{}, last_request{}, request_started{};
     char ip[16] = {};
     std::uint8_t buf[mbtcp::kMaxAduBytes] = {};
   };

@@ -26,6 +26,14 @@ struct PlcRequest {
   Clock::time_point at{};
 };
 
+// A connected Modbus peer, for the status page.
+struct PlcClientInfo {
+  char ip[16] = {};
+  bool plc = false;  // from plc.plc_addresses (server mode), or the PLC itself (client mode)
+  long requests = 0;
+  Clock::time_point connected{}, last_request{};
+};
+
 class PlcLink {
  public:
   virtual ~PlcLink() = default;
@@ -36,6 +44,11 @@ class PlcLink {
   virtual void publish(const reg::Result& result, std::uint16_t ack_id) = 0;
   virtual void heartbeat() = 0;  // HEARTBEAT + 1
   virtual std::string describe() const = 0;
+  // Fills at most `max` entries of `out` with the peers connected now; returns how many.
+  virtual int client_list(PlcClientInfo* out, int max) const {
+    (void)out, (void)max;
+    return 0;
+  }
 };
 
 // The link plc.mode names; trigger_ms is the period of mode "none". Throws PlcError naming the

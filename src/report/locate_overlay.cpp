@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <iterator>
+#include <vector>
 
 #include "render/raster.hpp"
 #include "render/text.hpp"
@@ -11,7 +12,15 @@ namespace pipeloc {
 namespace {
 
 const Rgb kRegion{170, 90, 220}, kCore{40, 110, 255}, kAxis{255, 150, 0}, kRidge{40, 230, 60},
-    kOutline{255, 235, 60}, kOther{150, 150, 150}, kPick{255, 30, 30};
+    kOutline{255, 235, 60}, kOther{150, 150, 150}, kPick{255, 30, 30}, kFloor{0, 150, 140};
+
+// A core at floor height that gave no pose is the bin floor seen between pipes, not a pipe: it is
+// drawn faintly in its own colour, without region, direction or ridge. Floor height: within D/2
+// of the lowest surface seen (a pipe lying on the floor has its core about D above it).
+bool floor_core(const CandidateRegion& r, const CandidateTrace* trace, float floor_z_mm, float tube_d_mm) {
+  const bool posed = trace && trace->outcome == CandidateOutcome::accepted;
+  return !posed && r.core_centroid.z() < floor_z_mm + 0.5f * tube_d_mm;
+}
 
 Eigen::Vector2d to_pixel(const CameraInfo& cam, const Pose& bin_to_cam, const Eigen::Vector3f& p_bin) {
   return cam.intrinsics.project(bin_to_cam * p_bin.cast<double>());
@@ -41,9 +50,10 @@ void draw_legend(Image<Rgb>* img) {
                            {kCore, "CORE REGION (UPWARD NORMALS)"},
                            {kRegion, "CANDIDATE REGION (GROWN)"},
                            {kAxis, "PRINCIPAL DIRECTION"},
-                           {kRidge, "Z-RIDGE POINTS"}};
+                           {kRidge, "Z-RIDGE POINTS"},
+                           {kFloor, "FLOOR SEEN BETWEEN PIPES (NO CANDIDATE)"}};
   const int scale = 1, line = 9, x0 = 4, y0 = 4;
-  const int w = 8 + 4 * scale * 36, h = line * int(std::size(entries)) + 4;
+  const int w = 8 + 4 * scale * 42, h = line * int(std::size(entries)) + 4;
   for (int y = y0; y < y0 + h; ++y)
     for (int x = x0; x < x0 + w; ++x)
       if (img->inside(x, y)) img->at(x, y) = {20, 20, 20};
@@ -70,8 +80,20 @@ Image<Rgb> draw_locate_overlay(const Locator& loc, const Image<float>& depth, co
   const RegionBuffers& rb = loc.regions();
   const int w = zb.z.width;
   const LocateOutput& out = loc.output();
+  const float tube_d_mm = loc.locator_model().tube_d_mm;
+  std::vector<bool> floor(rb.candidates.size(), false);
   for (std::size_t c = 0; c < rb.candidates.size(); ++c) {
     const CandidateRegion& r = rb.candidates[c];
+    floor[c] =
+        floor_core(r, c < out.traces.size() ? &out.traces[c] : nullptr, out.lowest_surface_z_mm, tube_d_mm);
+    if (floor[c]) {
+      for (int k = r.core_begin; k < r.core_end; ++k) {
+        const int cell = rb.core_cells[std::size_t(k)];
+        const Eigen::Vector2d px = to_pixel(cam, bin_to_cam, zb.point(cell % w, cell / w));
+        tint(&img, int(std::lround(px.x())), int(std::lround(px.y())), kFloor, 0.3f);
+      }
+      continue;
+    }
     for (int k = r.cells_begin; k < r.cells_end; ++k) {
       const int cell = rb.region_cells[std::size_t(k)];
       const Eigen::Vector2d px = to_pixel(cam, bin_to_cam, zb.point(cell % w, cell / w));
@@ -98,6 +120,7 @@ Image<Rgb> draw_locate_overlay(const Locator& loc, const Image<float>& depth, co
   }
   for (std::size_t c = 0; c < out.traces.size(); ++c) {
     const CandidateTrace& t = out.traces[c];
+    if (c < floor.size() && floor[c]) continue;
     // III's principal direction, drawn across its own region only.
     const Eigen::Vector3f dir(t.axis.axis.x(), t.axis.axis.y(), 0);
     float lo = 0, hi = 0;

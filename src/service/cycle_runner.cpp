@@ -94,6 +94,7 @@ void CycleRunner::run_one(const PlcRequest& req) {
   const std::uint64_t one = 1;
   [[maybe_unused]] const auto w = ::write(wake_fd_, &one, sizeof one);
   service_.log().write(service_.record());
+  service_.publish_status();
   if (!cancel_) service_.after_publish();  // shutting down: the simulated bin can stay as it is
   busy_since_ns_ = 0;
   ++completed_;

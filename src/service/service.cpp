@@ -123,7 +123,8 @@ void Service::locate(Clock::time_point trigger) {
   // A frame from before the trigger is never localized: it could show a pipe already picked.
   if (grab == GrabStatus::ok && frame_.captured <= trigger)
     grab = GrabStatus::frame_invalid, record_.frame_check = "taken before the trigger";
-  if (grab == GrabStatus::ok) grab = check_frame(frame_.depth_mm, source_->intrinsics(), 0.02, &record_.frame_check);
+  if (grab == GrabStatus::ok)
+    grab = check_frame(frame_.depth_mm, source_->intrinsics(), 0.02, &record_.frame_check);
   const Clock::time_point grabbed = Clock::now();
   record_.grab = grab;
   record_.grab_ms = ms_between(trigger, grabbed);
@@ -169,19 +170,47 @@ void Service::locate(Clock::time_point trigger) {
   result_.frame_age_ms = clamp_u16(record_.frame_age_ms);
 }
 
-void Service::after_publish() {
-  const int every = cfg_.log.overlay_every;
-  if (every > 0 && record_.command == std::uint16_t(reg::Command::locate) && record_.grab == GrabStatus::ok &&
-      cycles_ % std::uint32_t(every) == 0) {
-    // Written aside and renamed, so a viewer never catches half a file.
-    const std::string path = (std::filesystem::path(cfg_.log.dir) / "overlay-latest.png").string();
-    try {
-      write_rgb_png(path + ".tmp", draw_locate_overlay(locator_, frame_.depth_mm, frame_.camera));
-      std::filesystem::rename(path + ".tmp", path);
-    } catch (const std::exception& e) {
-      spdlog::warn("overlay: {}", e.what());
+void Service::publish_status() {
+  if (!board_) return;
+  StatusPose poses[StatusSnapshot::kPoses];
+  int n = 0;
+  if (record_.command == std::uint16_t(reg::Command::locate))
+    for (; n < StatusSnapshot::kPoses && n < int(ranked_.size()); ++n) {
+      const Ranked& r = ranked_[std::size_t(n)];
+      poses[n].robot = r.robot;
+      poses[n].score = r.score;
+      const Eigen::Vector3d t = r.model_to_cam.translation();
+      poses[n].cam_xyz_mm = {t.x(), t.y(), t.z()};
     }
+  board_->publish_command(record_, result_.index, poses, n);
+}
+
+// The integrator's picture of the last LOCATE: drawn once when the log or the status page wants it.
+void Service::write_overlays() {
+  if (record_.command != std::uint16_t(reg::Command::locate) || record_.grab != GrabStatus::ok) return;
+  auto due = [this](int every) { return every > 0 && cycles_ % std::uint32_t(every) == 0; };
+  const bool to_file = due(cfg_.log.overlay_every);
+  const bool to_board = board_ && cfg_.status.enabled && due(cfg_.status.overlay_every);
+  if (!to_file && !to_board) return;
+  try {
+    const Image<Rgb> overlay = draw_locate_overlay(locator_, frame_.depth_mm, frame_.camera);
+    if (to_file) {
+      // Written aside and renamed, so a viewer never catches half a file.
+      const std::string path = (std::filesystem::path(cfg_.log.dir) / "overlay-latest.png").string();
+      write_rgb_png(path + ".tmp", overlay);
+      std::filesystem::rename(path + ".tmp", path);
+    }
+    if (to_board) {
+      std::vector<std::uint8_t> png = encode_rgb_png(overlay);
+      board_->publish_overlay(&png, record_.cycle);
+    }
+  } catch (const std::exception& e) {
+    spdlog::warn("overlay: {}", e.what());
   }
+}
+
+void Service::after_publish() {
+  write_overlays();
   if (!pick_pending_) return;
   pick_pending_ = false;
   if (const Pose* p = presented()) source_->picked(*p);

@@ -13,6 +13,7 @@
 #include "plc/register_map.hpp"
 #include "service/cycle.hpp"
 #include "service/frame_source.hpp"
+#include "service/status_board.hpp"
 #include "service/timing_log.hpp"
 
 namespace pipeloc {
@@ -32,8 +33,14 @@ class Service {
   // NEXT presents the next pose of the last LOCATE; CLEAR_ERROR returns to READY, keeping the
   // poses of the last LOCATE for NEXT.
   const reg::Result& run(std::uint16_t command, std::uint16_t req_id, Clock::time_point trigger);
+  // The status page's board (owned by the caller, outliving the Service); nullptr: none.
+  void set_status_board(StatusBoard* board) { board_ = board; }
+  // Copies the last command's record and poses to the board (fixed size, no allocation); after
+  // the result is published, beside the timing log line.
+  void publish_status();
   // After the result is published (outside the cycle): every log.overlay_every LOCATEs the
-  // integrator's picture of the frame is written, and the simulated bin loses the pipe handed out.
+  // integrator's picture of the frame is written, every status.overlay_every LOCATEs it goes to
+  // the status board, and the simulated bin loses the pipe handed out.
   void after_publish();
   // Stops a running cycle at its next check (shutdown).
   void cancel_cycles(const std::atomic<bool>* flag) {
@@ -60,6 +67,7 @@ class Service {
   };
   void locate(Clock::time_point trigger);
   void present(int index);
+  void write_overlays();
 
   const AppConfig& cfg_;
   std::unique_ptr<FrameSource> source_;
@@ -72,6 +80,7 @@ class Service {
   bool pick_pending_ = false;
   std::uint32_t cycles_ = 0;
   const std::atomic<bool>* cancel_ = nullptr;
+  StatusBoard* board_ = nullptr;
   reg::Result result_;
   CycleRecord record_;
 };
