@@ -1,6 +1,7 @@
 #include <spdlog/spdlog.h>
 
 #include <chrono>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <map>
@@ -168,6 +169,11 @@ void add_eval_bop(CLI::App& app) {
     cfg.match_surface = opt->match == "surface";
     if (opt->search == "paper") use_paper_search(&cfg);
     const auto targets = read_targets(opt->dataset + "/test_targets_bop19.json");
+    if (!opt->overlays.empty()) {  // the integrator names a folder; it need not exist yet
+      std::error_code ec;
+      std::filesystem::create_directories(opt->overlays, ec);
+      if (ec) throw IoError("cannot create the overlay folder '" + opt->overlays + "': " + ec.message());
+    }
     std::map<int, std::unique_ptr<PipeModel>> models;
     std::map<int, std::unique_ptr<Locator>> locators;
     std::map<int, std::map<int, CameraInfo>> cameras;
