@@ -42,6 +42,8 @@ struct LocateConfig {
   double region_min_extent_of_l = 0.7;  // a of the paper
   double region_max_drop_of_d = 0.8;    // grown cells lie at most this far below their core
   double region_max_reach_of_d = 1.0;   // ... and at most this far from it (steps of growth)
+  double hole_bridge_of_d = 0;  // growth crosses holes in the top strip up to this * D long (0: off;
+                                // 1 bridges dropouts but costs the dev set 0.012 recall@5)
   double region_max_claimed_share = 0.75;  // a region with more of its cells in earlier candidates'
                                            // regions is another piece of a pipe already tried
   double convexity_min_share =

@@ -101,6 +101,8 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
   const float cell_area = float(zb.pixel_mm * zb.pixel_mm);
   const float area_min = float(cfg.core_min_area_of_d2) * d * d;
   const float core_extent_max = float(cfg.core_max_extent_of_l) * l;
+  const float up_min = float(std::cos(cfg.upward_normal_max_deg * kDeg));
+  const int bridge_cells = int(cfg.hole_bridge_of_d * d / zb.pixel_mm);
 
   // Upward cells were marked once (mark_upward_rows); labelling reads one byte per neighbour.
   Image<std::uint8_t>& open = rb->unlabelled_core;
@@ -285,23 +287,41 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
         for (int k = 0; k < 8; ++k) {
           const int ni = ci + kDi[k], nj = cj + kDj[k];
           if (!inside && (ni < 0 || nj < 0 || ni >= zb.width || nj >= zb.height)) continue;
-          const std::size_t q = std::size_t(at + neighbour[k]);
+          std::size_t q = std::size_t(at + neighbour[k]);
+          int gap = 0;  // empty cells crossed to reach q
+          // Beyond the paper: a hole in the top strip (a glint, a dropout) longer than the hole
+          // filling splits the strip into pieces each too short for a * L. With hole_bridge_of_d
+          // set, growth steps from an upward cell across empty cells (no reading) to the next
+          // upward cell within bridge_cells, at the height the slope predicts: one pipe, not two
+          // pieces. Off by default: it costs the dev set's torus two pipes (docs/experiments.md).
+          if (std::isnan(zb.z.pixels[q]) && bridge_cells > 0 && ni_n.z() > up_min) {
+            int gi = ni, gj = nj;
+            const auto in_bounds = [&](int i, int j) { return i >= 0 && j >= 0 && i < zb.width && j < zb.height; };
+            while (gap < bridge_cells && in_bounds(gi, gj) && !zb.valid(gi, gj)) gi += kDi[k], gj += kDj[k], ++gap;
+            if (!zb.valid(gi, gj)) continue;
+            q = std::size_t(zb.index(gi, gj));
+            if (!(nm.n.pixels[q].z() > up_min)) continue;
+            const float dz_per_cell = -(ni_n.x() * float(kDi[k]) + ni_n.y() * float(kDj[k])) / ni_n.z() *
+                                      float(zb.pixel_mm);
+            if (std::abs(zb.z.pixels[q] - (zi + dz_per_cell * float(gap + 1))) > step_max) continue;
+          }
           int& s = rb->stamp.pixels[q];
           if (s == stamp) continue;
           const Eigen::Vector3f& nn = nm.n.pixels[q];
           if (!has_normal(nn)) continue;
           const float zq = zb.z.pixels[q];
-          if (nn.dot(ni_n) <= cont_min || std::abs(zq - zi) > step_max || zq < top - drop_max) continue;
+          if (nn.dot(ni_n) <= cont_min || (gap == 0 && std::abs(zq - zi) > step_max) || zq < top - drop_max)
+            continue;
           // A piece of a split core does not grow back over the valley it was split along.
           if (split && in_valley(ni, nj)) continue;
           rb->ridge_z.pixels[q] = top;
-          rb->reach.pixels[q] = reach;
+          rb->reach.pixels[q] = reach + gap;
           if (count >= rb->max_region_cells) {
             leaked = true;
             break;
           }
           s = stamp;
-          rb->grow_queue[count] = pack(ni, nj);
+          rb->grow_queue[count] = pack(int(q) % w, int(q) / w);
           cells[count++] = int(q);
           // Convex: beside the core the surface tilts away from it (plane-fit normals, not noisy heights).
           if (head < core_count)
