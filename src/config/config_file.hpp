@@ -31,7 +31,7 @@ struct SimSourceConfig {
   double camera_height_min_mm = 980, camera_height_max_mm = 1080;  // above the bin floor, drawn per bin
   std::string sensor = "kinect";  // kinect (structured light) | stereo (active stereo, RealSense D4xx)
   bool refill = true;             // a new bin when the last pipe has been picked
-  std::string truth_file;         // if set: one JSON line per frame with every pipe's true pose (tests, demo)
+  std::string truth_file;  // if set: one JSON line per frame with every pipe's true pose (tests, demo)
 };
 
 struct ReplaySourceConfig {
@@ -66,17 +66,17 @@ struct PlcConfig {
   std::string mode = "server";  // server | client | none
   std::string address = "127.0.0.1";
   int port = 1502;
-  int base = 0;                 // first holding register of the map
-  int unit_id = 1;              // client mode: the PLC's unit identifier
-  int max_clients = 8;          // server mode: connections served at once
-  int request_timeout_ms = 500;  // server mode: a request not complete this long after its
-                                 // first byte closes its connection
-  int idle_timeout_ms = 60000;   // server mode: a connection without a request this long is closed
+  int base = 0;                            // first holding register of the map
+  int unit_id = 1;                         // client mode: the PLC's unit identifier
+  int max_clients = 8;                     // server mode: connections served at once
+  int request_timeout_ms = 500;            // server mode: a request not complete this long after its
+                                           // first byte closes its connection
+  int idle_timeout_ms = 60000;             // server mode: a connection without a request this long is closed
   std::vector<std::string> plc_addresses;  // server mode: the PLC's IPv4 addresses (never evicted
                                            // for another client)
-  int poll_ms = 50;             // client mode: how often CMD/REQ_ID are read
-  int reconnect_max_ms = 5000;  // client mode: backoff cap
-  int byte_timeout_ms = 100;    // client mode: the PLC's reply may pause this long between bytes
+  int poll_ms = 50;                        // client mode: how often CMD/REQ_ID are read
+  int reconnect_max_ms = 5000;             // client mode: backoff cap
+  int byte_timeout_ms = 100;               // client mode: the PLC's reply may pause this long between bytes
   reg::Encoding encoding;
   EulerConvention euler = EulerConvention::zyx;
   std::vector<double> robot_from_camera;  // optional 16 values, row-major, mm: hand-eye
@@ -99,6 +99,7 @@ struct AppConfig {
   PlcConfig plc;
   LogConfig log;
   std::vector<std::string> effective;  // "section.key = value  # unit" for every value in effect
+  std::vector<std::string> warnings;   // keys given that the chosen mode or source ignores
 };
 
 AppConfig load_config(const std::string& path);
