@@ -276,6 +276,8 @@ void read_source(const std::string& file, const toml::table* t, std::vector<std:
   sim.real("camera_height_max_mm", &c->sim.camera_height_max_mm, 200, 3000, "mm");
   sim.text("sensor", &c->sim.sensor, {"kinect", "stereo"});
   sim.boolean("refill", &c->sim.refill);
+  sim.integer("refill_after_frames_without_pick", &c->sim.refill_after_frames_without_pick, 0, 1000000,
+              "frames (0: never)");
   sim.text("truth_file", &c->sim.truth_file);
   sim.finish();
   if (c->sim.camera_height_min_mm > c->sim.camera_height_max_mm)

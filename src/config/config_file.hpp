@@ -31,6 +31,7 @@ struct SimSourceConfig {
   double camera_height_min_mm = 980, camera_height_max_mm = 1080;  // above the bin floor, drawn per bin
   std::string sensor = "kinect";  // kinect (structured light) | stereo (active stereo, RealSense D4xx)
   bool refill = true;             // a new bin when the last pipe has been picked
+  int refill_after_frames_without_pick = 0;  // ... or after this many frames in a row without one (0: never)
   std::string truth_file;  // if set: one JSON line per frame with every pipe's true pose (tests, demo)
 };
 
