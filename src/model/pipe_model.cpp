@@ -166,8 +166,7 @@ Pose refine_half_turn(const SurfaceSamples& surface, const IndexedSurface& index
       const Eigen::Vector3d q = m * surface.points[i * stride].cast<double>();
       int idx = 0;
       float d2 = 0;
-      indexed.tree.nearest(q.cast<float>(), &idx, &d2, 64);
-      if (d2 > gate * gate) continue;
+      if (!indexed.tree.nearest(q.cast<float>(), &idx, &d2, 64) || d2 > gate * gate) continue;
       const Eigen::Vector3d s = surface.points[std::size_t(idx)].cast<double>();
       const Eigen::Vector3d nrm = surface.normals[std::size_t(idx)].cast<double>();
       Eigen::Matrix<double, 6, 1> row;
@@ -213,8 +212,9 @@ LandingShare landing_share(const SurfaceSamples& surface, const IndexedSurface& 
     const Eigen::Vector3f q = (m * surface.points[i * stride].cast<double>()).cast<float>();
     int nearest = 0;
     float nearest_d2 = 0;
-    indexed.tree.nearest(q, &nearest, &nearest_d2, 64);
+    const bool landed = indexed.tree.nearest(q, &nearest, &nearest_d2, 64);
     out.worst_gap_mm = std::max(out.worst_gap_mm, std::sqrt(nearest_d2));
+    if (!landed) continue;  // off every sample: not within
     float best =
         std::abs((q - surface.points[std::size_t(nearest)]).dot(surface.normals[std::size_t(nearest)]));
     const int found = indexed.tree.radius(q, radius, idx, d2, kAround);
@@ -295,7 +295,7 @@ std::vector<Pose> find_near_symmetries(const SurfaceSamples& surface, const Eige
         const Eigen::Vector3f q = (m * p.cast<double>()).cast<float>();
         int idx = 0;
         float d2 = 0;
-        indexed.tree.nearest(q, &idx, &d2, 64);
+        if (!indexed.tree.nearest(q, &idx, &d2, 64)) continue;
         within += d2 <= tolerance_mm * tolerance_mm;
         if (d2 > gate * gate) continue;
         src.col(pairs) = p.cast<double>();
@@ -336,7 +336,8 @@ PipeModel derive_pipe_model(Mesh mesh, const std::string& source, const ModelDer
   model.vertex_normals = compute_vertex_normals(model.mesh);
   const float area = model.mesh.surface_area();
   if (!(area > 0) || !std::isfinite(area)) throw ModelError("model '" + source + "': surface area is zero");
-  const int count = std::clamp(int(area * params.samples_per_mm2), 100, params.max_samples);
+  // Clamped before the conversion: an area of 1e12 mm^2 times the density is beyond int (fuzz).
+  const int count = int(std::clamp(double(area) * params.samples_per_mm2, 100.0, double(params.max_samples)));
   model.surface = sample_surface(model.mesh, model.vertex_normals, count, params.seed);
   for (const auto& p : model.surface.points) model.centroid += p;
   model.centroid /= float(model.surface.points.size());
