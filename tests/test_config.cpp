@@ -1,8 +1,12 @@
 // The config file: errors name file, key and expectation.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include <fstream>
 #include <iterator>
+#include <regex>
+#include <set>
 #include <string>
 
 #include "config/config_file.hpp"
@@ -101,6 +105,87 @@ TEST(Config, DemoConfigListsTheStatusKeys) {
     ++keys;
   }
   EXPECT_EQ(keys, 5);
+}
+
+std::string load_error(const test::TempDir& dir, const std::string& text) {
+  test::write_text(dir.file("c.toml"), text);
+  try {
+    load_config(dir.file("c.toml"));
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(Config, UnknownSubTablesAreRejectedLikeUnknownKeys) {
+  test::TempDir dir;
+  for (const char* text :
+       {"[locate.extra]\nfoo = 1\n", "[plc.server]\nport = 1\n", "[log.rotate]\n", "[model.grasp]\nx = 1\n",
+        "[service.budget]\n", "[source.sim.noise]\nsigma = 1\n", "[source.camera]\n"}) {
+    const std::string msg = load_error(dir, text);
+    EXPECT_NE(msg.find("c.toml"), std::string::npos) << text << " -> " << msg;
+    EXPECT_NE(msg.find("unknown section"), std::string::npos) << text << " -> " << msg;
+  }
+  EXPECT_NE(load_error(dir, "[locate.extra]\nfoo = 1\n").find("locate.extra"), std::string::npos);
+  EXPECT_EQ(load_error(dir, "[source.sim]\npipes = 4\n[source.replay]\nmax_frames = 3\n"), "");
+}
+
+TEST(Config, KeysTheModeIgnoresAreWarnedAbout) {
+  test::TempDir dir;
+  const auto warnings_of = [&](const std::string& text) {
+    test::write_text(dir.file("c.toml"), text);
+    std::string all;
+    for (const std::string& w : load_config(dir.file("c.toml")).warnings) all += w + "\n";
+    return all;
+  };
+  std::string w = warnings_of("[plc]\nmode = \"server\"\npoll_ms = 20\nbyte_timeout_ms = 50\n");
+  EXPECT_NE(w.find("plc.poll_ms is ignored"), std::string::npos) << w;
+  EXPECT_NE(w.find("plc.byte_timeout_ms is ignored"), std::string::npos) << w;
+  EXPECT_NE(w.find("c.toml"), std::string::npos) << w;
+  w = warnings_of("[plc]\nmode = \"client\"\nmax_clients = 4\nplc_addresses = [\"10.0.0.1\"]\n");
+  EXPECT_NE(w.find("plc.max_clients is ignored"), std::string::npos) << w;
+  EXPECT_NE(w.find("plc.plc_addresses is ignored"), std::string::npos) << w;
+  w = warnings_of("[source]\nkind = \"sim\"\n[source.openni2]\nuri = \"Dummy\"\n");
+  EXPECT_NE(w.find("[source.openni2] is ignored"), std::string::npos) << w;
+  // Keys the mode uses, and defaults, are no warning.
+  EXPECT_EQ(warnings_of("[plc]\nmode = \"client\"\npoll_ms = 20\n[source.sim]\npipes = 3\n"), "");
+}
+
+// config/demo.toml claims to list every key of every section with its default: every key the
+// loader accepts (default_config() records each one it reads) appears in its section, as a
+// setting or, for another mode's or source's keys, commented out; and what it sets is the default.
+TEST(Config, DemoTomlListsEveryKeyAtItsDefault) {
+  std::ifstream in(PIPELOC_DEMO_TOML);
+  ASSERT_TRUE(in) << PIPELOC_DEMO_TOML;
+  std::set<std::string> listed;  // "section.key"
+  const std::regex header(R"(^\s*#?\s*\[([a-z0-9_.]+)\]\s*(#.*)?$)");
+  const std::regex key(R"(^\s*#?\s*([a-z0-9_]+)\s*=)");
+  std::string section, line;
+  std::smatch m;
+  while (std::getline(in, line)) {
+    if (std::regex_search(line, m, header))
+      section = m[1];
+    else if (!section.empty() && std::regex_search(line, m, key))
+      listed.insert(section + "." + std::string(m[1]));
+  }
+  int keys = 0;
+  for (const std::string& effective : default_config().effective) {
+    const std::string name = effective.substr(0, effective.find(' '));
+    ++keys;
+    EXPECT_TRUE(listed.count(name)) << name << " is not in config/demo.toml";
+  }
+  EXPECT_GT(keys, 90);
+  // Loaded, it is the embedded default, value for value, but for the status page it turns on
+  // (Config.DemoConfigListsTheStatusKeys), and warns about nothing.
+  const AppConfig demo = load_config(PIPELOC_DEMO_TOML);
+  const auto without_status = [](std::vector<std::string> lines) {
+    lines.erase(std::remove_if(lines.begin(), lines.end(),
+                               [](const std::string& l) { return l.rfind("status.", 0) == 0; }),
+                lines.end());
+    return lines;
+  };
+  EXPECT_EQ(without_status(demo.effective), without_status(embedded_default_config().effective));
+  EXPECT_TRUE(demo.warnings.empty()) << demo.warnings.front();
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <random>
 
 #include "model/make_pipe.hpp"
@@ -108,7 +109,8 @@ TEST(MakePipe, TwistKeepsTheWallWhole) {
   twisted.diameter_mm = turned.diameter_mm = 10;
   twisted.segments = parse_centreline("S60,B90r30,B90r30t180,S60");
   turned.segments = parse_centreline("S60,B90r30,B-90r30,S60");  // the same tube
-  EXPECT_NEAR(make_pipe(twisted).surface_area(), make_pipe(turned).surface_area(), 1e-3 * make_pipe(turned).surface_area());
+  EXPECT_NEAR(make_pipe(twisted).surface_area(), make_pipe(turned).surface_area(),
+              1e-3 * make_pipe(turned).surface_area());
 }
 
 // Exact symmetries are found on thin tubes as on thick ones, and whatever the mesh's resolution:
@@ -125,9 +127,9 @@ TEST(PipeModel, ExactSymmetriesWhateverTheTubeAndTheMesh) {
       {"S50,B120r40,S50", 12, 1},         // line-arc-line
       {"S60,B180r40,S60", 8, 1},          // U with equal legs
       {"S40,B60r50,S50,B-60r50,S40", 25, 1},
-      {"S60,B90r30,B90r30t180,S60", 10, 1},    // the same S, its second bend twisted round
+      {"S60,B90r30,B90r30t180,S60", 10, 1},     // the same S, its second bend twisted round
       {"S30,B120r45t90,B90r45t90,S30", 16, 0},  // a coil: near-symmetric only
-      {"S120,B160r35,S20", 14, 0},           // a hook
+      {"S120,B160r35,S20", 14, 0},              // a hook
   };
   for (const Case& c : cases)
     for (const int sides : {12, 64})
@@ -217,6 +219,27 @@ TEST(KdTree3, MatchesBruteForce) {
       for (int i = 0; i < k; ++i) EXPECT_LE((pts[indices[i]] - query).squaredNorm(), 900.0f + 1e-2f);
     }
   }
+}
+
+// Found by tools/fuzz (stl): a query the tree could not place left the index at FLANN's -1, and
+// the model derivation read points[-1]. Nothing found is now index -1, distance infinite, false.
+TEST(KdTree3, AQueryNotFiniteFindsNothing) {
+  const std::vector<Eigen::Vector3f> pts = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  KdTree3 tree;
+  tree.build(pts.data(), pts.size());
+  const float inf = std::numeric_limits<float>::infinity(), nan = std::numeric_limits<float>::quiet_NaN();
+  for (const Eigen::Vector3f& q : {Eigen::Vector3f(nan, 0, 0), Eigen::Vector3f(0, inf, 0)}) {
+    int idx = 7;
+    float d2 = 0;
+    EXPECT_FALSE(tree.nearest(q, &idx, &d2));
+    EXPECT_EQ(idx, -1);
+    EXPECT_EQ(d2, inf);
+  }
+  KdTree3 empty;
+  int idx = 7;
+  float d2 = 0;
+  EXPECT_FALSE(empty.nearest(pts[0], &idx, &d2));
+  EXPECT_EQ(idx, -1);
 }
 
 }  // namespace

@@ -2,9 +2,9 @@
 // budget and results, the timing log. Data come from the project's simulator.
 #include <gtest/gtest.h>
 
-#include <nlohmann/json.hpp>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <thread>
 
 #include "io/png.hpp"
@@ -65,7 +65,8 @@ TEST(ServiceConfig, EveryWrongKeyNamesFileAndKey) {
       {"[source.sim]\npipes = 0\n", "source.sim.pipes"},
       {"[source.sim]\nsensor = \"tof\"\n", "source.sim.sensor"},
       {"[source.sim]\ncamera_height_min_mm = 100\n", "source.sim.camera_height_min_mm"},
-      {"[source.sim]\ncamera_height_min_mm = 900\ncamera_height_max_mm = 800\n", "source.sim.camera_height_max_mm"},
+      {"[source.sim]\ncamera_height_min_mm = 900\ncamera_height_max_mm = 800\n",
+       "source.sim.camera_height_max_mm"},
       {"[source.usb]\nx = 1\n", "source.usb"},
       {"[log]\nkeep_files = -1\n", "log.keep_files"},
       {"[model]\nstl = \"a.stl\"\npreset = \"u\"\n", "model"},
@@ -210,6 +211,27 @@ TEST(SimSource, FramesAreFreshAndAPickedPipeLeavesTheBin) {
   for (int i = 0; i < 4; ++i) src.picked(src.pipes_in_camera()[0]);
   EXPECT_EQ(src.bins_filled(), 2);  // emptied, then refilled
   EXPECT_EQ(src.pipes_in_camera().size(), 5u);
+}
+
+// refill_after_frames_without_pick: a bin nothing is picked from is replaced after N frames;
+// a pick in between starts the count again.
+TEST(SimSource, ABinWithoutPicksIsReplacedAfterNFrames) {
+  SimSourceConfig cfg;
+  cfg.pipes = 3;
+  cfg.refill_after_frames_without_pick = 3;
+  SimSource src(sbend(), cfg);
+  Frame f;
+  f.depth_mm.resize(src.intrinsics().width, src.intrinsics().height);
+  const auto grab = [&] { ASSERT_EQ(src.grab(Clock::now(), Clock::now(), &f), GrabStatus::ok); };
+  for (int i = 0; i < 3; ++i) grab();
+  EXPECT_EQ(src.bins_filled(), 1);
+  src.picked(src.pipes_in_camera()[0]);  // a pick: the count starts again
+  for (int i = 0; i < 3; ++i) grab();
+  EXPECT_EQ(src.bins_filled(), 1);
+  EXPECT_EQ(src.pipes_in_camera().size(), 2u);
+  grab();  // the fourth frame in a row without a pick sees a new bin
+  EXPECT_EQ(src.bins_filled(), 2);
+  EXPECT_EQ(src.pipes_in_camera().size(), 3u);
 }
 
 // A straight tube picked with another turn about its axis is the same pick (the scorer's view).
@@ -392,8 +414,12 @@ TEST(Service, AFailingSourceGivesErrorsThenCyclesResume) {
                                  reg::Error::frame_invalid,      reg::Error::frame_invalid,
                                  reg::Error::frame_invalid,      reg::Error::sensor_unavailable};
   // What the timing log says beside ERROR 2: which check the frame failed.
-  const char* const check[] = {"", "rejected by the source", "too few pixels with depth",
-                               "a depth is NaN or infinite", "a depth is negative", ""};
+  const char* const check[] = {"",
+                               "rejected by the source",
+                               "too few pixels with depth",
+                               "a depth is NaN or infinite",
+                               "a depth is negative",
+                               ""};
   for (int i = 0; i < 6; ++i) {
     const reg::Result& r = service.run(1, std::uint16_t(i + 1), Clock::now());
     EXPECT_EQ(r.status, reg::Status::error) << i;
@@ -497,7 +523,8 @@ TEST(TimingLog, ReopensADeletedFolderAndCountsAFullDisk) {
   EXPECT_EQ(log.reopened(), 1);
   std::ifstream in(log.path());
   int lines = 0;
-  for (std::string line; std::getline(in, line);) lines += line.find("\"event\":\"cycle\"") != std::string::npos;
+  for (std::string line; std::getline(in, line);)
+    lines += line.find("\"event\":\"cycle\"") != std::string::npos;
   EXPECT_EQ(lines, 2);
   LogConfig full;
   full.dir = dir.file("full");

@@ -54,7 +54,17 @@ void add_bench(CLI::App& app) {
                   "untimed, then --rounds times");
   cmd->add_option("--rounds", opt->rounds, "with --dataset: timed passes over its frames")
       ->check(CLI::Range(1, 1000));
-  cmd->callback([opt] {
+  cmd->callback([opt, cmd] {
+    // An option the chosen mode does not use is refused: the run would not be what was asked for.
+    for (const char* o : {"--model", "--frames", "--warmup", "--pipes", "--seed"})
+      if (!opt->dataset.empty() && cmd->count(o))
+        throw CLI::ValidationError(
+            o,
+            "simulated frames only; with --dataset the dataset's frames and models are "
+            "timed (--rounds passes)");
+    if (opt->dataset.empty() && cmd->count("--rounds"))
+      throw CLI::ValidationError("--rounds",
+                                 "with --dataset only; simulated frames are timed --frames times");
     const LocateConfig cfg = opt->config.empty() ? LocateConfig{} : load_config(opt->config).locate;
     std::vector<std::unique_ptr<PipeModel>> models;
     std::vector<std::unique_ptr<Locator>> locators;

@@ -35,9 +35,9 @@ void add_calibrate_bin(CLI::App& app) {
     const auto it = opt->im_id < 0 ? cameras.begin() : cameras.find(opt->im_id);
     if (it == cameras.end())
       throw IoError("'" + opt->camera + "': no entry for image " + std::to_string(opt->im_id));
-    const Image<float> depth = read_depth_mm(opt->depth, it->second.depth_scale);
-    Intrinsics k = it->second.intrinsics;
-    k.width = depth.width, k.height = depth.height;
+    CameraInfo cam = it->second;
+    const Image<float> depth = read_depth_for_camera(opt->depth, opt->camera, it->first, &cam);
+    const Intrinsics k = cam.intrinsics;
     BinCalibParams params;
     params.roi_margin_mm = opt->margin_mm;
     const BinCalib calib = calibrate_bin(depth, k, params);

@@ -59,9 +59,9 @@ void add_calibrate_hand_eye(CLI::App& app) {
     std::vector<SphereFit> fits;
     for (std::size_t i = 0; i < file.stations.size(); ++i) {
       const Station& s = file.stations[i];
-      const Image<float> depth = read_depth_mm(s.depth, cam.depth_scale);
-      Intrinsics k = cam.intrinsics;
-      k.width = depth.width, k.height = depth.height;
+      CameraInfo sized = cam;
+      const Image<float> depth = read_depth_for_camera(s.depth, file.camera, cameras.begin()->first, &sized);
+      const Intrinsics k = sized.intrinsics;
       const SphereFit fit = find_sphere(depth, k, params);
       if (!fit.ok) {
         spdlog::error(

@@ -14,6 +14,7 @@
 #include "locate/locator.hpp"
 #include "model/pipe_model.hpp"
 #include "report/locate_overlay.hpp"
+#include "service/frame_source.hpp"
 
 namespace pipeloc::app {
 namespace {
@@ -75,11 +76,15 @@ void add_locate(CLI::App& app) {
     const auto it = opt->im_id < 0 ? cameras.begin() : cameras.find(opt->im_id);
     if (it == cameras.end())
       throw IoError("'" + opt->camera + "': no entry for image " + std::to_string(opt->im_id));
-    const CameraInfo& cam = it->second;
-    const Image<float> depth = read_depth_mm(opt->depth, cam.depth_scale);
-    CameraInfo sized = cam;
-    sized.intrinsics.width = depth.width;
-    sized.intrinsics.height = depth.height;
+    CameraInfo sized = it->second;
+    const Image<float> depth = read_depth_for_camera(opt->depth, opt->camera, it->first, &sized);
+    // The frame checks of the service's cycle (where such a frame gets ERROR 2): said, not an
+    // empty result that looks like a bin without pipes.
+    if (const char* why = "";
+        check_frame(depth, sized.intrinsics, kMinValidDepthShare, &why) != GrabStatus::ok)
+      throw IoError("depth '" + opt->depth + "': not a frame to localize in: " + why + " (" +
+                    std::to_string(valid_depth_pixels(depth)) + " of " + std::to_string(depth.pixels.size()) +
+                    " pixels have a depth; the service answers such a frame with ERROR 2)");
     const PipeModel model = load_pipe_model(model_file);
     Locator locator(model, cfg, sized.intrinsics);
     const LocateOutput& out = locator.locate(depth, sized);
@@ -116,12 +121,13 @@ void add_locate(CLI::App& app) {
         pick >= 0 ? "rank " + std::to_string(pick) : std::string("none"));
     const StageTimes& st = out.times;
     if (out.noise.samples > 0)
-      spdlog::info("depth noise {:.2f} mm (1 sigma, measured) at a median depth of {:.0f} mm", out.noise.sigma_mm,
-                   out.noise.depth_mm);
-    spdlog::info("thresholds in effect: continuity step {:.1f} mm, verify tolerance {:.1f} mm, refine inliers "
-                 "{:.1f} mm, normal window {:.1f} mm, hole fill {:.1f} mm",
-                 locator.config().continuity_step_max_mm, locator.config().verify_tolerance_mm,
-                 locator.config().refine_inlier_mm, locator.config().normal_window_mm, locator.config().hole_fill_mm);
+      spdlog::info("depth noise {:.2f} mm (1 sigma, measured) at a median depth of {:.0f} mm",
+                   out.noise.sigma_mm, out.noise.depth_mm);
+    spdlog::info(
+        "thresholds in effect: continuity step {:.1f} mm, verify tolerance {:.1f} mm, refine inliers "
+        "{:.1f} mm, normal window {:.1f} mm, hole fill {:.1f} mm",
+        locator.config().continuity_step_max_mm, locator.config().verify_tolerance_mm,
+        locator.config().refine_inlier_mm, locator.config().normal_window_mm, locator.config().hole_fill_mm);
     spdlog::info(
         "stages ms: zbuffer {:.1f} normals {:.1f} regions {:.1f} axis {:.1f} ridge_icp {:.1f} refine {:.1f} "
         "verify {:.1f}",
@@ -186,12 +192,20 @@ void add_eval_bop(CLI::App& app) {
       if (!picks_csv) throw IoError("cannot write '" + opt->picks + "'");
       write_results_header(picks_csv);
     }
-    int images = 0, rows = 0, picked = 0;
+    int images = 0, rows = 0, picked = 0, refused = 0;
     double total_ms = 0;
     for (const auto& t : targets) {
       const TargetFrame frame = read_target_frame(opt->dataset, t, &cameras);
       const Image<float>& depth = frame.depth_mm;
       const CameraInfo& cam = frame.camera;
+      if (const char* why = "";
+          check_frame(depth, cam.intrinsics, kMinValidDepthShare, &why) != GrabStatus::ok) {
+        spdlog::warn(
+            "scene {} image {}: not a frame to localize in: {} ({} of {} pixels have a depth): no rows",
+            t.scene_id, t.im_id, why, valid_depth_pixels(depth), depth.pixels.size());
+        ++refused;
+        continue;
+      }
       if (!locators.count(t.obj_id)) {
         models[t.obj_id] = std::make_unique<PipeModel>(load_pipe_model(model_path(opt->dataset, t.obj_id)));
         locators[t.obj_id] = std::make_unique<Locator>(*models[t.obj_id], cfg, cam.intrinsics);
@@ -226,6 +240,7 @@ void add_eval_bop(CLI::App& app) {
                  images ? total_ms / images : 0.0, opt->out);
     if (picks_csv.is_open())
       spdlog::info("{} of {} images hand out a pick -> {}", picked, images, opt->picks);
+    if (refused) spdlog::warn("{} images refused (no usable depth): no rows for them", refused);
   });
 }
 

@@ -28,12 +28,15 @@ void add_make_pipe(CLI::App& app) {
       ->expected(3);
   cmd->add_option("--rotate", opt->rotate, "model-frame rotation about x, y, z, degrees")->expected(3);
   cmd->add_flag("--ascii", opt->ascii, "write ASCII STL instead of binary");
-  cmd->callback([opt] {
+  cmd->callback([opt, cmd] {
     if (opt->preset.empty() == opt->path.empty())
       throw ModelError("make-pipe: give exactly one of --path or --preset");
+    if (cmd->count("--diameter") && !(opt->diameter > 0 && opt->diameter <= 1000))
+      throw ModelError("make-pipe: --diameter: expected a tube diameter in (0, 1000] mm, got " +
+                       std::to_string(opt->diameter));
     PipeSpec spec = opt->preset.empty() ? PipeSpec{} : pipe_preset(opt->preset);
     if (!opt->path.empty()) spec.segments = parse_centreline(opt->path);
-    if (opt->diameter > 0) spec.diameter_mm = opt->diameter;
+    if (cmd->count("--diameter")) spec.diameter_mm = opt->diameter;
     if (!opt->rotate.empty()) {
       const double d = M_PI / 180;
       spec.model_frame.linear() = (Eigen::AngleAxisd(opt->rotate[2] * d, Eigen::Vector3d::UnitZ()) *
@@ -44,8 +47,9 @@ void add_make_pipe(CLI::App& app) {
     if (!opt->offset.empty())
       spec.model_frame.translation() = Eigen::Vector3d(opt->offset[0], opt->offset[1], opt->offset[2]);
     const Mesh mesh = make_pipe(spec);
-    write_stl(opt->out, mesh, opt->ascii ? StlFormat::ascii : StlFormat::binary);
+    // Derived first, so that a pipe the localizer would refuse (too long, too thin) is not written.
     const PipeModel model = derive_pipe_model(mesh, opt->out);
+    write_stl(opt->out, mesh, opt->ascii ? StlFormat::ascii : StlFormat::binary);
     spdlog::info(
         "wrote {}: {} triangles, tube diameter {:.2f} mm, longest extent L {:.1f} mm, {} symmetries, {} near "
         "symmetries",

@@ -29,6 +29,7 @@ void add_record(CLI::App& app) {
   cmd->add_option("--out", opt->out, "dataset folder to write")->required();
   cmd->callback([opt] {
     const AppConfig cfg = opt->config.empty() ? embedded_default_config() : load_config(opt->config);
+    for (const auto& line : cfg.warnings) spdlog::warn("{}", line);
     const PipeModel model = load_config_model(cfg);
     std::unique_ptr<FrameSource> source = open_frame_source(cfg, model);
     spdlog::info("record: {}", source->describe());

@@ -90,6 +90,10 @@ int serve(const Options& opt) {
   if (!opt.log_dir.empty()) cfg.log.dir = opt.log_dir;
   spdlog::info("pipeloc serve: config {}", cfg.path.empty() ? "(embedded default: simulated bin)" : cfg.path);
   for (const auto& line : describe_config(cfg)) spdlog::info("config: {}", line);
+  for (const auto& line : cfg.warnings) spdlog::warn("{}", line);
+  if (opt.trigger_ms > 0 && cfg.plc.mode != "none")
+    throw CLI::ValidationError("--trigger-ms", "triggers LOCATE only with plc.mode \"none\"; plc.mode is \"" +
+                                                   cfg.plc.mode + "\" (the PLC triggers)");
   // configure
   const PipeModel model = load_config_model(cfg);
   spdlog::info(

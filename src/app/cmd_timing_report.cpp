@@ -8,6 +8,7 @@
 #include <ctime>
 #include <fstream>
 #include <map>
+#include <type_traits>
 
 #include "app/commands.hpp"
 #include "io/json_file.hpp"
@@ -38,6 +39,25 @@ std::string utc_text(double unix_ms) {
   char s[32];
   std::strftime(s, sizeof s, "%Y-%m-%d %H:%M:%S", &tm);
   return s;
+}
+
+// A field of a timing-log line: absent -> fallback; present with another type -> an IoError naming
+// the file, the line and the field (a hand-edited or foreign log, not a raw json exception).
+template <typename T>
+T field(const Json& j, const char* key, T fallback, const std::string& path, int line) {
+  const auto it = j.find(key);
+  if (it == j.end()) return fallback;
+  const bool ok = std::is_same_v<T, bool>          ? it->is_boolean()
+                  : std::is_same_v<T, std::string> ? it->is_string()
+                                                   : it->is_number();
+  if (!ok)
+    throw IoError("timing log '" + path + "': line " + std::to_string(line) + ": field \"" + key +
+                  "\": expected " +
+                  (std::is_same_v<T, bool>          ? "true or false"
+                   : std::is_same_v<T, std::string> ? "a string"
+                                                    : "a number") +
+                  ", got " + it->dump());
+  return it->template get<T>();
 }
 
 struct Cycle {
@@ -185,16 +205,29 @@ void add_timing_report(CLI::App& app) {
           ++malformed;  // e.g. a line cut by a power loss
           continue;
         }
-        if (j.value("event", "") != "cycle" || j.value("cmd", 0) != 1) continue;
+        if (!j.is_object()) {
+          ++malformed;
+          continue;
+        }
+        if (field<std::string>(j, "event", "", path, n) != "cycle" ||
+            field<double>(j, "cmd", 0, path, n) != 1)
+          continue;
+        if (!j.contains("cycle_ms") || !j.contains("trigger_unix_ms"))
+          throw IoError("timing log '" + path + "': line " + std::to_string(n) +
+                        ": a cycle without field \"" +
+                        (j.contains("cycle_ms") ? "trigger_unix_ms" : "cycle_ms") + "\"");
         ++cycles;
         for (const char* k : kStages)
-          if (const double v = j.value(k, 0.0); v > 0 || std::string(k) == "cycle_ms") series[k].push_back(v);
+          if (const double v = field<double>(j, k, 0.0, path, n); v > 0 || std::string(k) == "cycle_ms")
+            series[k].push_back(v);
+        const std::string error = field<std::string>(j, "error", "none", path, n);
         const std::string outcome =
-            j.value("status", "?") + (j.value("error", "none") == "none" ? "" : " " + j.value("error", ""));
-        by_outcome[outcome].push_back(j.value("cycle_ms", 0.0));
-        all.push_back({j.value("trigger_unix_ms", 0.0), j.value("cycle_ms", 0.0), outcome});
-        cut += j.value("budget_exhausted", false);
-        budget_ms = j.value("budget_ms", budget_ms);
+            field<std::string>(j, "status", "?", path, n) + (error == "none" ? "" : " " + error);
+        const double cycle_ms = field<double>(j, "cycle_ms", 0.0, path, n);
+        by_outcome[outcome].push_back(cycle_ms);
+        all.push_back({field<double>(j, "trigger_unix_ms", 0.0, path, n), cycle_ms, outcome});
+        cut += field<bool>(j, "budget_exhausted", false, path, n);
+        budget_ms = field<double>(j, "budget_ms", budget_ms, path, n);
       }
     }
     if (cycles == 0) throw IoError("timing log: no LOCATE cycles in " + opt->logs.front());

@@ -112,14 +112,23 @@ class Section {
     numbers(key, &v, 3, unit);
     std::copy(v.begin(), v.end(), dst->begin());
   }
-  void finish() const {
+  // Rejects keys nobody asked for, and sub-tables other than `subsections` (read by their own
+  // Section): a misspelt [locate.extra] is as wrong as a misspelt key.
+  void finish(std::initializer_list<const char*> subsections = {}) const {
     if (!table_) return;
     for (const auto& [key, node] : *table_) {
-      if (node.is_table()) continue;  // a sub-section, read by its own Section
-      if (!taken_.count(std::string(key.str())))
-        fail(file_, full(std::string(key.str()).c_str()), "unknown key");
+      const std::string k(key.str());
+      if (node.is_table()) {
+        bool known = false;
+        for (const char* sub : subsections) known = known || k == sub;
+        if (!known) fail(file_, full(k.c_str()), unknown_section(subsections));
+      } else if (!taken_.count(k)) {
+        fail(file_, full(k.c_str()), "unknown key");
+      }
     }
   }
+  // The key was written in the file (not left at its default).
+  bool given(const char* key) const { return table_ && table_->contains(key); }
   const std::string& file() const { return file_; }
   std::string full(const char* key) const { return name_ + "." + key; }
 
@@ -127,6 +136,12 @@ class Section {
   const toml::node* take(const char* key) {
     taken_.insert(key);
     return table_ ? table_->get(key) : nullptr;
+  }
+  std::string unknown_section(std::initializer_list<const char*> subsections) const {
+    if (subsections.size() == 0) return "unknown section ([" + name_ + "] has no sub-sections)";
+    std::string expected;
+    for (const char* sub : subsections) expected += std::string(expected.empty() ? "" : " or ") + sub;
+    return "unknown section (expected " + expected + ")";
   }
   static std::string range(const char* what, double lo, double hi, const char* unit) {
     std::ostringstream s;
@@ -241,7 +256,7 @@ void read_model(Section& s, const std::string& file, ModelConfig* m) {
 }
 
 void read_source(const std::string& file, const toml::table* t, std::vector<std::string>* eff,
-                 SourceConfig* c) {
+                 std::vector<std::string>* warnings, SourceConfig* c) {
   auto sub = [&](const char* name) -> const toml::table* {
     if (!t) return nullptr;
     const toml::node* n = t->get(name);
@@ -251,11 +266,13 @@ void read_source(const std::string& file, const toml::table* t, std::vector<std:
   };
   Section s(file, "source", t, eff);
   s.text("kind", &c->kind, {"sim", "replay", "openni2"});
-  s.finish();
+  s.finish({"sim", "replay", "openni2"});
+  // A source's own table is read (and checked) whatever the kind, but only the chosen one is used.
   if (t)
-    for (const auto& [key, node] : *t)
-      if (node.is_table() && key.str() != "sim" && key.str() != "replay" && key.str() != "openni2")
-        fail(file, "source." + std::string(key.str()), "unknown section (expected sim, replay or openni2)");
+    for (const char* name : {"sim", "replay", "openni2"})
+      if (name != c->kind && t->contains(name))
+        warnings->push_back("config '" + file + "': [source." + name + "] is ignored: source.kind is \"" +
+                            c->kind + "\"");
 
   Section sim(file, "source.sim", sub("sim"), eff);
   sim.integer("pipes", &c->sim.pipes, 1, 200, "pipes");
@@ -265,6 +282,8 @@ void read_source(const std::string& file, const toml::table* t, std::vector<std:
   sim.real("camera_height_max_mm", &c->sim.camera_height_max_mm, 200, 3000, "mm");
   sim.text("sensor", &c->sim.sensor, {"kinect", "stereo"});
   sim.boolean("refill", &c->sim.refill);
+  sim.integer("refill_after_frames_without_pick", &c->sim.refill_after_frames_without_pick, 0, 1000000,
+              "frames (0: never)");
   sim.text("truth_file", &c->sim.truth_file);
   sim.finish();
   if (c->sim.camera_height_min_mm > c->sim.camera_height_max_mm)
@@ -322,7 +341,7 @@ std::string rigid_transform_problem(const double* m) {
   return "";
 }
 
-void read_plc(Section& s, PlcConfig* p) {
+void read_plc(Section& s, std::vector<std::string>* warnings, PlcConfig* p) {
   s.text("mode", &p->mode, {"server", "client", "none"});
   s.text("address", &p->address, {}, false);
   if (!is_ipv4_address(p->address))
@@ -349,6 +368,17 @@ void read_plc(Section& s, PlcConfig* p) {
   s.text("euler", &euler, {"ZYX", "XYZ"});
   p->euler = parse_euler_convention(euler);
   s.numbers("robot_from_camera", &p->robot_from_camera, 16, "4x4 row-major, mm");
+  // Keys of the other mode are checked like the rest but do nothing: say so (a warning, not an
+  // error: one file may serve cells in both modes, or a cell switched from one to the other).
+  auto ignored = [&](std::initializer_list<const char*> keys, const char* used_in) {
+    for (const char* k : keys)
+      if (s.given(k))
+        warnings->push_back("config '" + s.file() + "': " + s.full(k) + " is ignored: it is used in " +
+                            used_in + " mode only and plc.mode is \"" + p->mode + "\"");
+  };
+  if (p->mode != "server")
+    ignored({"max_clients", "request_timeout_ms", "idle_timeout_ms", "plc_addresses"}, "server");
+  if (p->mode != "client") ignored({"unit_id", "poll_ms", "reconnect_max_ms", "byte_timeout_ms"}, "client");
   if (!p->robot_from_camera.empty()) {
     const std::string why = rigid_transform_problem(p->robot_from_camera.data());
     if (!why.empty())
@@ -393,7 +423,7 @@ void read_all(const std::string& file, const toml::table& root, AppConfig* cfg) 
   Section locate(file, "locate", table("locate"), eff);
   read_locate(locate, &cfg->locate);
 
-  read_source(file, table("source"), eff, &cfg->source);
+  read_source(file, table("source"), eff, &cfg->warnings, &cfg->source);
 
   Section service(file, "service", table("service"), eff);
   service.real("budget_ms", &cfg->service.budget_ms, 5, 60000, "ms");
@@ -401,7 +431,7 @@ void read_all(const std::string& file, const toml::table& root, AppConfig* cfg) 
   service.finish();
 
   Section plc(file, "plc", table("plc"), eff);
-  read_plc(plc, &cfg->plc);
+  read_plc(plc, &cfg->warnings, &cfg->plc);
 
   Section log(file, "log", table("log"), eff);
   log.text("dir", &cfg->log.dir, {}, false);

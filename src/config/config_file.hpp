@@ -31,7 +31,8 @@ struct SimSourceConfig {
   double camera_height_min_mm = 980, camera_height_max_mm = 1080;  // above the bin floor, drawn per bin
   std::string sensor = "kinect";  // kinect (structured light) | stereo (active stereo, RealSense D4xx)
   bool refill = true;             // a new bin when the last pipe has been picked
-  std::string truth_file;         // if set: one JSON line per frame with every pipe's true pose (tests, demo)
+  int refill_after_frames_without_pick = 0;  // ... or after this many frames in a row without one (0: never)
+  std::string truth_file;  // if set: one JSON line per frame with every pipe's true pose (tests, demo)
 };
 
 struct ReplaySourceConfig {
@@ -109,6 +110,7 @@ struct AppConfig {
   LogConfig log;
   StatusConfig status;
   std::vector<std::string> effective;  // "section.key = value  # unit" for every value in effect
+  std::vector<std::string> warnings;   // keys given that the chosen mode or source ignores
 };
 
 AppConfig load_config(const std::string& path);

@@ -25,6 +25,7 @@ struct CameraInfo {
   Intrinsics intrinsics;
   double depth_scale = 1.0;          // depth_mm = png value * depth_scale
   std::optional<Pose> world_to_cam;  // cam_R_w2c / cam_t_w2c: world Z points up
+  bool size_given = false;           // the camera file gave width/height (BOP's files need not)
 };
 
 }  // namespace pipeloc

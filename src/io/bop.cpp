@@ -43,6 +43,26 @@ void require_array(const Json& list, const std::string& path, const std::string&
   if (!list.is_array()) throw IoError("'" + path + "': \"" + key + "\": expected an array");
 }
 
+// Why 9 row-major values are not a rotation ("" when they are): rows orthonormal and determinant
+// +1, each to 1e-3 (a matrix typed with 4 decimals passes; a typo, a scale or a transpose
+// mistake for a mirror do not).
+std::string rotation_problem(const std::array<double, 9>& r) {
+  for (int i = 0; i < 3; ++i)
+    for (int j = i; j < 3; ++j) {
+      const double dot = r[3 * i] * r[3 * j] + r[3 * i + 1] * r[3 * j + 1] + r[3 * i + 2] * r[3 * j + 2];
+      if (std::abs(dot - (i == j ? 1.0 : 0.0)) > 1e-3) {
+        char s[96];
+        std::snprintf(s, sizeof s, "rows not orthonormal (row %d . row %d = %.6g, expected %d)", i + 1, j + 1,
+                      dot, i == j ? 1 : 0);
+        return s;
+      }
+    }
+  const double det = r[0] * (r[4] * r[8] - r[5] * r[7]) - r[1] * (r[3] * r[8] - r[5] * r[6]) +
+                     r[2] * (r[3] * r[7] - r[4] * r[6]);
+  if (det < 0) return "determinant -1 (a reflection)";
+  return "";
+}
+
 Json require_object(const std::string& path) {
   Json root = read_json(path);
   if (!root.is_object()) throw IoError("'" + path + "': expected a JSON object keyed by image id");
@@ -93,18 +113,27 @@ std::map<int, CameraInfo> read_scene_camera(const std::string& path) {
     cam.intrinsics.cy = k[5];
     if (!(k[0] > 0 && k[4] > 0))
       throw IoError("'" + path + "': " + where + ".cam_K: focal lengths must be > 0");
-    if (value.contains("width"))
+    if (value.contains("width") != value.contains("height"))
+      throw IoError("'" + path + "': " + where + ": width and height come together");
+    if (value.contains("width")) {
       cam.intrinsics.width = json_field<int>(value, "width", path, where, "an integer");
-    if (value.contains("height"))
       cam.intrinsics.height = json_field<int>(value, "height", path, where, "an integer");
+      if (!(cam.intrinsics.width > 0 && cam.intrinsics.height > 0 && cam.intrinsics.width <= 100000 &&
+            cam.intrinsics.height <= 100000))
+        throw IoError("'" + path + "': " + where + ".width/height: expected sizes in [1, 100000] px");
+      cam.size_given = true;
+    }
     cam.depth_scale = json_field<double>(value, "depth_scale", path, where, "a number");
     if (!(cam.depth_scale > 0))
       throw IoError("'" + path + "': " + where + ".depth_scale: expected a number > 0");
     const bool has_r = value.contains("cam_R_w2c"), has_t = value.contains("cam_t_w2c");
     if (has_r != has_t) throw IoError("'" + path + "': " + where + ": cam_R_w2c and cam_t_w2c come together");
-    if (has_r)
-      cam.world_to_cam = pose_from_rt(fixed_array<9>(value, "cam_R_w2c", path, where),
-                                      fixed_array<3>(value, "cam_t_w2c", path, where));
+    if (has_r) {
+      const auto r = fixed_array<9>(value, "cam_R_w2c", path, where);
+      if (const std::string why = rotation_problem(r); !why.empty())
+        throw IoError("'" + path + "': image " + key + ": cam_R_w2c: expected a rotation matrix: " + why);
+      cam.world_to_cam = pose_from_rt(r, fixed_array<3>(value, "cam_t_w2c", path, where));
+    }
     out[id] = cam;
   }
   return out;
@@ -188,6 +217,25 @@ Image<float> read_depth_mm(const std::string& png_path, double depth_scale) {
   return depth;
 }
 
+Image<float> read_depth_for_camera(const std::string& png_path, const std::string& camera_path, int im_id,
+                                   CameraInfo* camera) {
+  Image<float> depth = read_depth_mm(png_path, camera->depth_scale);
+  Intrinsics& k = camera->intrinsics;
+  const auto size = [](int w, int h) { return std::to_string(w) + "x" + std::to_string(h); };
+  if (camera->size_given && (depth.width != k.width || depth.height != k.height))
+    throw IoError("depth '" + png_path + "' is " + size(depth.width, depth.height) + " px but its camera ('" +
+                  camera_path + "', image " + std::to_string(im_id) + ") is for " + size(k.width, k.height) +
+                  " px images: intrinsics of another image or resolution");
+  if (!(k.cx >= 0 && k.cx <= depth.width && k.cy >= 0 && k.cy <= depth.height))
+    throw IoError("depth '" + png_path + "' is " + size(depth.width, depth.height) + " px but its camera ('" +
+                  camera_path + "', image " + std::to_string(im_id) + ") has its principal point at (" +
+                  std::to_string(k.cx) + ", " + std::to_string(k.cy) +
+                  "), outside the image: intrinsics of another resolution");
+  k.width = depth.width;
+  k.height = depth.height;
+  return depth;
+}
+
 TargetFrame read_target_frame(const std::string& dataset, const Target& t,
                               std::map<int, std::map<int, CameraInfo>>* cameras) {
   if (!cameras->count(t.scene_id))
@@ -196,10 +244,10 @@ TargetFrame read_target_frame(const std::string& dataset, const Target& t,
   const auto cam = scene.find(t.im_id);
   if (cam == scene.end())
     throw IoError("scene " + std::to_string(t.scene_id) + ": no camera for image " + std::to_string(t.im_id));
-  TargetFrame frame{cam->second,
-                    read_depth_mm(depth_path(dataset, t.scene_id, t.im_id), cam->second.depth_scale)};
-  frame.camera.intrinsics.width = frame.depth_mm.width;
-  frame.camera.intrinsics.height = frame.depth_mm.height;
+  TargetFrame frame{cam->second, {}};
+  frame.depth_mm =
+      read_depth_for_camera(depth_path(dataset, t.scene_id, t.im_id),
+                            scene_dir(dataset, t.scene_id) + "/scene_camera.json", t.im_id, &frame.camera);
   return frame;
 }
 

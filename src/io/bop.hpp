@@ -47,6 +47,12 @@ std::map<int, ModelInfo> read_models_info(const std::string& path);
 // Depth in mm (float) from a 16-bit PNG and its depth_scale; 0 = no reading.
 Image<float> read_depth_mm(const std::string& png_path, double depth_scale);
 
+// The depth image of one camera entry (image im_id of camera_path), checked against it: the
+// size the entry gives (width/height, when it does), the principal point inside the image. The
+// camera gets the image's size. An IoError names both files, the image and the sizes.
+Image<float> read_depth_for_camera(const std::string& png_path, const std::string& camera_path, int im_id,
+                                   CameraInfo* camera);
+
 // One target's depth image and camera (intrinsics sized to the image). Each scene's camera file
 // is read once into `cameras`; a missing camera entry is an IoError naming scene and image.
 struct TargetFrame {

@@ -1,6 +1,7 @@
 #include "model/neighbors.hpp"
 
 #include <flann/flann.hpp>
+#include <limits>
 
 namespace pipeloc {
 
@@ -23,12 +24,20 @@ void KdTree3::build(const Eigen::Vector3f* points, std::size_t count) {
 }
 
 bool KdTree3::nearest(const Eigen::Vector3f& query, int* index, float* dist_sq, int checks) const {
-  if (!impl_->index) return false;
+  // Nothing found (an empty tree, a query FLANN cannot place, e.g. beyond float range): index -1
+  // and an infinite distance, never an index a caller could read out of range with (tools/fuzz).
+  *index = -1;
+  *dist_sq = std::numeric_limits<float>::infinity();
+  if (!impl_->index || !query.allFinite()) return false;
   flann::Matrix<float> q(const_cast<float*>(query.data()), 1, 3);
   flann::Matrix<int> idx(index, 1, 1);
   flann::Matrix<float> dst(dist_sq, 1, 1);
   flann::SearchParams params(checks <= 0 ? flann::FLANN_CHECKS_UNLIMITED : checks);
-  return impl_->index->knnSearch(q, idx, dst, 1, params) == 1;
+  if (impl_->index->knnSearch(q, idx, dst, 1, params) == 1 && *index >= 0 && std::size_t(*index) < count_)
+    return true;
+  *index = -1;
+  *dist_sq = std::numeric_limits<float>::infinity();
+  return false;
 }
 
 int KdTree3::radius(const Eigen::Vector3f& query, float radius_mm, int* indices, float* dists_sq,

@@ -19,7 +19,8 @@ class KdTree3 {
   void build(const Eigen::Vector3f* points, std::size_t count);
   std::size_t size() const { return count_; }
 
-  // Nearest point to query; returns false when the tree is empty.
+  // Nearest point to query; returns false (index -1, distance infinite) when there is none: an
+  // empty tree or a query that is not finite.
   // `checks` bounds the leaves visited (FLANN's approximation knob; <= 0 means exact).
   bool nearest(const Eigen::Vector3f& query, int* index, float* dist_sq, int checks = -1) const;
 

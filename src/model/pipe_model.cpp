@@ -144,8 +144,9 @@ namespace {
 // A half-turn about a principal axis, refined on the part of the surface it maps onto itself:
 // pairs are gated from `gate_start_mm` down to `gate_end_mm`, so that parts that differ do not
 // pull and sampling noise in the principal axes (a degree or so) is taken out.
-Pose refine_half_turn(const SurfaceSamples& surface, const IndexedSurface& indexed, const Eigen::Vector3f& centroid,
-                      int axis, std::size_t stride, float gate_start_mm, float gate_end_mm) {
+Pose refine_half_turn(const SurfaceSamples& surface, const IndexedSurface& indexed,
+                      const Eigen::Vector3f& centroid, int axis, std::size_t stride, float gate_start_mm,
+                      float gate_end_mm) {
   Pose m = half_turn(indexed.axes.col(axis), centroid);
   const std::size_t n = (surface.points.size() + stride - 1) / stride;
   float reach_mm = 0;  // the samples' farthest distance from the origin of the model frame
@@ -165,8 +166,7 @@ Pose refine_half_turn(const SurfaceSamples& surface, const IndexedSurface& index
       const Eigen::Vector3d q = m * surface.points[i * stride].cast<double>();
       int idx = 0;
       float d2 = 0;
-      indexed.tree.nearest(q.cast<float>(), &idx, &d2, 64);
-      if (d2 > gate * gate) continue;
+      if (!indexed.tree.nearest(q.cast<float>(), &idx, &d2, 64) || d2 > gate * gate) continue;
       const Eigen::Vector3d s = surface.points[std::size_t(idx)].cast<double>();
       const Eigen::Vector3d nrm = surface.normals[std::size_t(idx)].cast<double>();
       Eigen::Matrix<double, 6, 1> row;
@@ -212,12 +212,16 @@ LandingShare landing_share(const SurfaceSamples& surface, const IndexedSurface& 
     const Eigen::Vector3f q = (m * surface.points[i * stride].cast<double>()).cast<float>();
     int nearest = 0;
     float nearest_d2 = 0;
-    indexed.tree.nearest(q, &nearest, &nearest_d2, 64);
+    const bool landed = indexed.tree.nearest(q, &nearest, &nearest_d2, 64);
     out.worst_gap_mm = std::max(out.worst_gap_mm, std::sqrt(nearest_d2));
-    float best = std::abs((q - surface.points[std::size_t(nearest)]).dot(surface.normals[std::size_t(nearest)]));
+    if (!landed) continue;  // off every sample: not within
+    float best =
+        std::abs((q - surface.points[std::size_t(nearest)]).dot(surface.normals[std::size_t(nearest)]));
     const int found = indexed.tree.radius(q, radius, idx, d2, kAround);
     for (int k = 0; k < found; ++k)
-      best = std::min(best, std::abs((q - surface.points[std::size_t(idx[k])]).dot(surface.normals[std::size_t(idx[k])])));
+      best = std::min(
+          best,
+          std::abs((q - surface.points[std::size_t(idx[k])]).dot(surface.normals[std::size_t(idx[k])])));
     within += std::sqrt(nearest_d2) <= radius && best <= tolerance_mm;
   }
   out.within = float(within) / float(std::max<std::size_t>(1, n));
@@ -291,7 +295,7 @@ std::vector<Pose> find_near_symmetries(const SurfaceSamples& surface, const Eige
         const Eigen::Vector3f q = (m * p.cast<double>()).cast<float>();
         int idx = 0;
         float d2 = 0;
-        indexed.tree.nearest(q, &idx, &d2, 64);
+        if (!indexed.tree.nearest(q, &idx, &d2, 64)) continue;
         within += d2 <= tolerance_mm * tolerance_mm;
         if (d2 > gate * gate) continue;
         src.col(pairs) = p.cast<double>();
@@ -332,7 +336,8 @@ PipeModel derive_pipe_model(Mesh mesh, const std::string& source, const ModelDer
   model.vertex_normals = compute_vertex_normals(model.mesh);
   const float area = model.mesh.surface_area();
   if (!(area > 0) || !std::isfinite(area)) throw ModelError("model '" + source + "': surface area is zero");
-  const int count = std::clamp(int(area * params.samples_per_mm2), 100, params.max_samples);
+  // Clamped before the conversion: an area of 1e12 mm^2 times the density is beyond int (fuzz).
+  const int count = int(std::clamp(double(area) * params.samples_per_mm2, 100.0, double(params.max_samples)));
   model.surface = sample_surface(model.mesh, model.vertex_normals, count, params.seed);
   for (const auto& p : model.surface.points) model.centroid += p;
   model.centroid /= float(model.surface.points.size());
@@ -345,6 +350,13 @@ PipeModel derive_pipe_model(Mesh mesh, const std::string& source, const ModelDer
   if (model.tube_diameter_mm < kMinTubeMm)
     throw ModelError("model '" + source + "': tube diameter " + std::to_string(model.tube_diameter_mm) +
                      " mm, under 1 mm: the STL must be in millimetres (is it in metres?)");
+  // A pipe longer than 3 m fits in no bin a depth sensor sees whole, and the localizer's buffers
+  // grow with L^2 (its ridge grid alone is (L / 2 mm)^2 cells): a 50 m model asks for tens of GB.
+  // Most likely the STL is in tenths of a millimetre or micrometres.
+  constexpr float kMaxExtentMm = 3000.0f;
+  if (model.extent_mm > kMaxExtentMm)
+    throw ModelError("model '" + source + "': longest extent L " + std::to_string(int(model.extent_mm)) +
+                     " mm, beyond 3000 mm: the STL must be in millimetres (is it in 1/10 mm or um?)");
   model.symmetry_tolerance_mm = params.symmetry_tolerance_of_diameter * model.tube_diameter_mm;
   // The samples' spacing: a mapped sample lands between samples, up to this far from the nearest.
   const float spacing_mm = std::sqrt(area / float(model.surface.points.size()));

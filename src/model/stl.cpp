@@ -1,5 +1,6 @@
 #include "model/stl.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -83,6 +84,23 @@ Mesh parse_ascii(const std::string& path, const std::string& text) {
   return soup;
 }
 
+// Printable ASCII and whitespace only in the first bytes: a text file (a binary STL's header may
+// be text, but its count and floats are not).
+bool looks_like_text(const std::string& bytes) {
+  const std::size_t n = std::min<std::size_t>(bytes.size(), 512);
+  for (std::size_t i = 0; i < n; ++i) {
+    const unsigned char c = static_cast<unsigned char>(bytes[i]);
+    if (!(c == '\n' || c == '\r' || c == '\t' || (c >= 32 && c < 127))) return false;
+  }
+  return true;
+}
+
+// The first line (at most 40 characters) of a text file, for the message.
+std::string first_line(const std::string& bytes) {
+  std::string line = bytes.substr(0, std::min(bytes.find_first_of("\r\n"), std::size_t(40)));
+  return line.size() == 40 ? line + "..." : line;
+}
+
 }  // namespace
 
 Mesh read_stl(const std::string& path) {
@@ -101,6 +119,9 @@ Mesh read_stl(const std::string& path) {
     binary_size_matches = bytes.size() == kHeaderBytes + 4 + std::size_t(count) * kTriangleBytes;
   }
   const bool looks_ascii = bytes.compare(0, 5, "solid") == 0 && bytes.find("facet", 5) != std::string::npos;
+  if (!binary_size_matches && bytes.compare(0, 5, "solid") != 0 && looks_like_text(bytes))
+    fail(path, "not an STL file: it is text (first line \"" + first_line(bytes) +
+                   "\"), neither a binary STL nor an ASCII one ('solid' with 'facet' lines)");
   Mesh soup;
   if (binary_size_matches ||
       (!looks_ascii && bytes.size() >= kHeaderBytes + 4 && bytes.compare(0, 5, "solid") != 0)) {

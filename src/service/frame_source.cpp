@@ -46,4 +46,10 @@ GrabStatus check_frame(const Image<float>& depth, const Intrinsics& expected, do
   return GrabStatus::frame_invalid;
 }
 
+std::size_t valid_depth_pixels(const Image<float>& depth) {
+  std::size_t valid = 0;
+  for (const float z : depth.pixels) valid += std::isfinite(z) && z > 0;
+  return valid;
+}
+
 }  // namespace pipeloc

@@ -51,7 +51,10 @@ std::unique_ptr<FrameSource> open_frame_source(const AppConfig& cfg, const PipeM
 // A frame the localizer can work on: the right size, finite non-negative depths, and at least
 // min_valid_share of its pixels with a reading. *why (when given) says which check failed, for
 // the timing log (ERROR 2 alone does not tell a maintainer what was wrong).
+constexpr double kMinValidDepthShare = 0.02;
 GrabStatus check_frame(const Image<float>& depth_mm, const Intrinsics& expected,
-                       double min_valid_share = 0.02, const char** why = nullptr);
+                       double min_valid_share = kMinValidDepthShare, const char** why = nullptr);
+// Pixels with a depth reading (finite, > 0).
+std::size_t valid_depth_pixels(const Image<float>& depth_mm);
 
 }  // namespace pipeloc

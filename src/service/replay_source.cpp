@@ -22,7 +22,8 @@ ReplaySource::ReplaySource(const ReplaySourceConfig& cfg) : cfg_(cfg) {
         const int scene_id = std::stoi(scene.filename().string());
         for (const auto& [im_id, camera] : read_scene_camera((scene / "scene_camera.json").string())) {
           if (frames_.size() >= std::size_t(cfg.max_frames)) break;
-          add(depth_path(cfg.path, scene_id, im_id), camera, scene_id, im_id);
+          add(depth_path(cfg.path, scene_id, im_id), (scene / "scene_camera.json").string(), im_id, camera,
+              scene_id, im_id);
         }
       }
     } else {  // a folder of PNGs and one camera
@@ -36,7 +37,7 @@ ReplaySource::ReplaySource(const ReplaySourceConfig& cfg) : cfg_(cfg) {
         if (e.is_regular_file() && e.path().extension() == ".png") pngs.push_back(e.path());
       std::sort(pngs.begin(), pngs.end());
       for (std::size_t i = 0; i < pngs.size() && frames_.size() < std::size_t(cfg.max_frames); ++i)
-        add(pngs[i].string(), cameras.begin()->second, 0, int(i));
+        add(pngs[i].string(), cfg.camera, cameras.begin()->first, cameras.begin()->second, 0, int(i));
     }
   } catch (const IoError& e) {
     throw SourceError(std::string("source.replay: ") + e.what());
@@ -46,12 +47,11 @@ ReplaySource::ReplaySource(const ReplaySourceConfig& cfg) : cfg_(cfg) {
   if (frames_.empty()) throw SourceError("source.replay.path '" + cfg.path + "': no depth PNGs found");
 }
 
-void ReplaySource::add(const std::string& png, const CameraInfo& camera, int scene_id, int im_id) {
+void ReplaySource::add(const std::string& png, const std::string& camera_file, int camera_id,
+                       const CameraInfo& camera, int scene_id, int im_id) {
   Stored s;
-  s.depth_mm = read_depth_mm(png, camera.depth_scale);
   s.camera = camera;
-  s.camera.intrinsics.width = s.depth_mm.width;
-  s.camera.intrinsics.height = s.depth_mm.height;
+  s.depth_mm = read_depth_for_camera(png, camera_file, camera_id, &s.camera);
   s.scene_id = scene_id;
   s.im_id = im_id;
   if (frames_.empty())

@@ -24,7 +24,9 @@ class ReplaySource : public FrameSource {
     CameraInfo camera;
     int scene_id = 0, im_id = 0;
   };
-  void add(const std::string& png, const CameraInfo& camera, int scene_id, int im_id);
+  // One frame; its size is checked against its camera (image camera_id of camera_file).
+  void add(const std::string& png, const std::string& camera_file, int camera_id, const CameraInfo& camera,
+           int scene_id, int im_id);
 
   ReplaySourceConfig cfg_;
   std::vector<Stored> frames_;

@@ -124,7 +124,7 @@ void Service::locate(Clock::time_point trigger) {
   if (grab == GrabStatus::ok && frame_.captured <= trigger)
     grab = GrabStatus::frame_invalid, record_.frame_check = "taken before the trigger";
   if (grab == GrabStatus::ok)
-    grab = check_frame(frame_.depth_mm, source_->intrinsics(), 0.02, &record_.frame_check);
+    grab = check_frame(frame_.depth_mm, source_->intrinsics(), kMinValidDepthShare, &record_.frame_check);
   const Clock::time_point grabbed = Clock::now();
   record_.grab = grab;
   record_.grab_ms = ms_between(trigger, grabbed);

@@ -62,6 +62,12 @@ void SimSource::render() {
 }
 
 GrabStatus SimSource::grab(Clock::time_point, Clock::time_point, Frame* out) {
+  // A bin whose last pipes are never handed out would be seen for ever: a new one, if asked.
+  if (cfg_.refill && cfg_.refill_after_frames_without_pick > 0 &&
+      ++frames_without_pick_ > cfg_.refill_after_frames_without_pick) {
+    frames_without_pick_ = 0;
+    fill_bin();
+  }
   // The simulated sensor exposes now, after the trigger.
   apply_sensor_noise(view_, params_.intrinsics, params_.sensor, int(pile_.size()), rng_, &out->depth_mm);
   out->camera.intrinsics = params_.intrinsics;
@@ -86,6 +92,7 @@ void SimSource::picked(const Pose& model_to_cam) {
     }
   }
   if (best < 0) return;  // a pose off every pipe: the gripper closes on nothing
+  frames_without_pick_ = 0;
   pile_.erase(pile_.begin() + best);
   if (pile_.empty() && cfg_.refill)
     fill_bin();

@@ -43,6 +43,7 @@ class SimSource : public FrameSource {
   SensorView view_;
   std::uint64_t sequence_ = 0;
   int bins_ = 0;
+  int frames_without_pick_ = 0;
   std::FILE* truth_ = nullptr;
 };
 
