@@ -1,6 +1,7 @@
 // Helpers of the localizer's tests: preset models, simulated frames, synthetic Z-buffers.
 #pragma once
 
+#include <algorithm>
 #include <map>
 #include <random>
 #include <string>
@@ -32,6 +33,13 @@ inline double pose_error_with_turns(const PipeModel& m, const Pose& a, const Pos
   std::vector<Eigen::Vector3d> v;
   for (const auto& p : m.mesh.vertices) v.push_back(p.cast<double>());
   return mssd(v, a, b, with_tube_turns(v, m.symmetries), 1e9);
+}
+
+// The least pose_error of `pose` against the pipes of a simulated scene.
+inline double nearest_pipe_error(const PipeModel& m, const Pose& pose, const SimulatedScene& s) {
+  double best = 1e9;
+  for (std::size_t g = 0; g < s.model_to_world.size(); ++g) best = std::min(best, pose_error(m, pose, s.model_to_cam(g)));
+  return best;
 }
 
 // Fills a Z-buffer with z = f(x, y) on a 1 mm grid.

@@ -105,10 +105,7 @@ TEST(Locator, NoPickablePoseIsAnArcSlidAlongItself) {
     for (const PipeEstimate& e : loc.locate(s.depth_mm, s.camera).estimates) {
       if (!e.pickable) continue;
       ++pickable;
-      double nearest = 1e9;
-      for (std::size_t g = 0; g < s.model_to_world.size(); ++g)
-        nearest = std::min(nearest, pose_error(model, e.model_to_cam, s.model_to_cam(g)));
-      wrong += nearest > 10;
+      wrong += nearest_pipe_error(model, e.model_to_cam, s) > 10;
     }
   }
   EXPECT_GE(pickable, 1);
@@ -131,10 +128,7 @@ TEST(Locator, AThinSymmetricPipeIsPickable) {
     Locator loc(model, cfg, s.camera.intrinsics);
     const LocateOutput& out = loc.locate(s.depth_mm, s.camera);
     for (std::size_t k = 0; k < out.estimates.size(); ++k) {
-      double best = 1e9;
-      for (std::size_t g = 0; g < s.model_to_world.size(); ++g)
-        best = std::min(best, pose_error(model, out.estimates[k].model_to_cam, s.model_to_cam(g)));
-      if (best >= 5) continue;
+      if (nearest_pipe_error(model, out.estimates[k].model_to_cam, s) >= 5) continue;
       ++right;
       ambiguous += out.estimates[k].ambiguous;
       picked_right += int(k) == out.pick();
