@@ -14,17 +14,20 @@
 namespace pipeloc {
 namespace {
 
+// The message loading `text` as a config file gives (empty: it loaded).
+std::string load_error(const test::TempDir& dir, const std::string& text) {
+  test::write_text(dir.file("c.toml"), text);
+  try {
+    load_config(dir.file("c.toml"));
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+  return "";
+}
+
 TEST(Config, ErrorsNameFileKeyAndExpectation) {
   test::TempDir dir;
-  const auto error_of = [&](const std::string& text) {
-    test::write_text(dir.file("c.toml"), text);
-    try {
-      load_config(dir.file("c.toml"));
-    } catch (const ConfigError& e) {
-      return std::string(e.what());
-    }
-    return std::string();
-  };
+  const auto error_of = [&](const std::string& text) { return load_error(dir, text); };
   std::string msg = error_of("[locate]\nupward_normal_max_degrees = 20\n");
   EXPECT_NE(msg.find("c.toml"), std::string::npos) << msg;
   EXPECT_NE(msg.find("locate.upward_normal_max_degrees: unknown key"), std::string::npos) << msg;
@@ -51,15 +54,7 @@ TEST(Config, StatusTableIsOffByDefaultAndChecksEveryKey) {
   const AppConfig defaults = default_config();
   EXPECT_FALSE(defaults.status.enabled);
   EXPECT_EQ(defaults.status.address, "127.0.0.1");
-  const auto error_of = [&](const std::string& text) {
-    test::write_text(dir.file("c.toml"), text);
-    try {
-      load_config(dir.file("c.toml"));
-    } catch (const ConfigError& e) {
-      return std::string(e.what());
-    }
-    return std::string();
-  };
+  const auto error_of = [&](const std::string& text) { return load_error(dir, text); };
   std::string msg = error_of("[status]\nenabled = 1\n");
   EXPECT_NE(msg.find("status.enabled: expected true or false"), std::string::npos) << msg;
   msg = error_of("[status]\naddress = \"localhost\"\n");
@@ -104,16 +99,6 @@ TEST(Config, DemoConfigListsTheStatusKeys) {
     ++keys;
   }
   EXPECT_EQ(keys, 5);
-}
-
-std::string load_error(const test::TempDir& dir, const std::string& text) {
-  test::write_text(dir.file("c.toml"), text);
-  try {
-    load_config(dir.file("c.toml"));
-  } catch (const ConfigError& e) {
-    return e.what();
-  }
-  return "";
 }
 
 TEST(Config, UnknownSubTablesAreRejectedLikeUnknownKeys) {

@@ -11,6 +11,7 @@
 #include <type_traits>
 
 #include "app/commands.hpp"
+#include "core/clock.hpp"
 #include "io/json_file.hpp"
 #include "io/png.hpp"
 #include "render/overlay.hpp"
@@ -31,15 +32,6 @@ std::string fmt(double v) {
   return s;
 }
 
-// "2026-11-23 18:45:44" (UTC) from Unix milliseconds.
-std::string utc_text(double unix_ms) {
-  const std::time_t t = std::time_t(unix_ms / 1000);
-  std::tm tm{};
-  gmtime_r(&t, &tm);
-  char s[32];
-  std::strftime(s, sizeof s, "%Y-%m-%d %H:%M:%S", &tm);
-  return s;
-}
 
 // A field of a timing-log line: absent -> fallback; present with another type -> an IoError naming
 // the file, the line and the field (a hand-edited or foreign log, not a raw json exception).

@@ -2,6 +2,8 @@
 #pragma once
 
 #include <chrono>
+#include <ctime>
+#include <string>
 
 namespace pipeloc {
 
@@ -18,6 +20,15 @@ inline Clock::duration ms_duration(double ms) {
 inline double unix_ms_now() {
   return std::chrono::duration<double, std::milli>(std::chrono::system_clock::now().time_since_epoch())
       .count();
+}
+// "2026-11-23 18:45:44" (UTC) from Unix milliseconds.
+inline std::string utc_text(double unix_ms) {
+  const std::time_t t = std::time_t(unix_ms / 1000);
+  std::tm tm{};
+  gmtime_r(&t, &tm);
+  char s[32];
+  std::strftime(s, sizeof s, "%Y-%m-%d %H:%M:%S", &tm);
+  return s;
 }
 
 }  // namespace pipeloc

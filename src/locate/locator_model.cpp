@@ -196,7 +196,7 @@ LocatorModel prepare_locator_model(const PipeModel& model, float margin_mm, cons
     // tolerance and share are those of the near symmetries: a quarter of D, 60 % of the surface.
     const ModelDerivation near;
     const float step = float(std::max(cfg.ambiguity_pose_mm, 0.5 * double(lm.tube_d_mm)));
-    for (const Slide& s : find_slides(model.surface, lm.tube_d_mm, {1.5f * step, 3.0f * step, 5.0f * step},
+    for (const Slide& s : find_slides(model.surface, centreline, lm.tube_d_mm, {1.5f * step, 3.0f * step, 5.0f * step},
                                       near.near_symmetry_tolerance_of_diameter * lm.tube_d_mm,
                                       near.near_symmetry_min_share))
       lm.slides.push_back(s.motion);

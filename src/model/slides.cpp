@@ -117,10 +117,9 @@ Centreline centreline_of(const SurfaceSamples& surface, float d) {
   return out;
 }
 
-std::vector<Slide> find_slides(const SurfaceSamples& surface, float d, const std::vector<float>& arc_mm,
-                               float tolerance_mm, float min_share) {
+std::vector<Slide> find_slides(const SurfaceSamples& surface, const Centreline& line, float d,
+                               const std::vector<float>& arc_mm, float tolerance_mm, float min_share) {
   std::vector<Slide> found;
-  const Centreline line = centreline_of(surface, d);
   const int n = int(line.points.size());
   if (n < 4) return found;
   KdTree3 tree;

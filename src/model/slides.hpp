@@ -32,7 +32,7 @@ struct Slide {
 // by s (least squares over the part that overlaps); kept when at least min_share of the surface
 // samples land within tolerance_mm of the surface and the centreline lands on itself within 3 % of
 // D (model/slides.cpp). None for a part whose shape changes along it.
-std::vector<Slide> find_slides(const SurfaceSamples& surface, float tube_d_mm, const std::vector<float>& arc_mm,
-                               float tolerance_mm, float min_share);
+std::vector<Slide> find_slides(const SurfaceSamples& surface, const Centreline& centreline, float tube_d_mm,
+                               const std::vector<float>& arc_mm, float tolerance_mm, float min_share);
 
 }  // namespace pipeloc

@@ -1,4 +1,5 @@
 #include "status/status_page.hpp"
+#include "core/clock.hpp"
 
 #include <cstdio>
 #include <ctime>
@@ -54,7 +55,7 @@ std::string header(const StatusView& v, const StatusInfo& info) {
                  : "<span class=\"bad\">NOT HEALTHY (a command runs over its budget + 2 s, or the cycle "
                    "thread stopped)</span>";
   h += " &middot; up " + duration_text((v.now_unix_ms - info.start_unix_ms) / 1000) + " &middot; page of " +
-       utc_time_text(v.now_unix_ms) + " UTC, reloads every " + std::to_string(info.refresh_s) + " s</p>";
+       utc_text(v.now_unix_ms) + " UTC, reloads every " + std::to_string(info.refresh_s) + " s</p>";
   h += "<table>";
   auto kv = [&](const char* k, const std::string& val) {
     h += "<tr>" + head(k, true) + cell(html_escape(val), true) + "</tr>";
@@ -76,7 +77,7 @@ std::string overlay_section(const StatusSnapshot& s) {
   const std::string c = std::to_string(s.overlay_cycle);
   h += "<img id=\"overlay\" src=\"/overlay.png?cycle=" + c + "\" alt=\"overlay of LOCATE cycle " + c +
        "\" onload=\"this.dataset.loadedWidth=this.naturalWidth\">";
-  h += "<p class=\"note\">LOCATE cycle " + c + ", drawn " + utc_time_text(s.overlay_unix_ms) +
+  h += "<p class=\"note\">LOCATE cycle " + c + ", drawn " + utc_text(s.overlay_unix_ms) +
        " UTC. Depth in grey; coloured: what the localizer found (legend in the corner); "
        "red outline and cross: the pose handed to the PLC.</p></section>";
   return h;
@@ -89,7 +90,7 @@ std::string last_locate_section(const StatusSnapshot& s) {
   h += "<table><tr>" + head("cycle") + head("REQ_ID") + head("at (UTC)", true) + head("STATUS", true) +
        head("ERROR", true) + head("cycle ms") + head("frame age ms") + head("candidates") +
        head("estimates") + head("poses handed out") + "</tr><tr>" + cell(std::to_string(r.cycle)) +
-       cell(std::to_string(r.req_id)) + cell(utc_time_text(r.trigger_unix_ms), true) + status_cell(r.status) +
+       cell(std::to_string(r.req_id)) + cell(utc_text(r.trigger_unix_ms), true) + status_cell(r.status) +
        cell(error_text(r.error, r.frame_check), true) + cell(fmt("%.1f", r.cycle_ms)) +
        cell(fmt("%.1f", r.frame_age_ms)) + cell(std::to_string(r.candidates)) +
        cell(std::to_string(r.accepted)) + cell(std::to_string(r.count)) + "</tr></table>";
@@ -161,7 +162,7 @@ std::string recent_section(const StatusSnapshot& s) {
     const int i = (s.recent_next - 1 - k + 2 * StatusSnapshot::kRecent) % StatusSnapshot::kRecent;
     const StatusRow& r = s.recent[i];
     const bool locate = r.command == std::uint16_t(reg::Command::locate);
-    h += "<tr>" + cell(utc_time_text(r.trigger_unix_ms), true) + cell(std::to_string(r.req_id)) +
+    h += "<tr>" + cell(utc_text(r.trigger_unix_ms), true) + cell(std::to_string(r.req_id)) +
          cell(command_name(r.command), true) + status_cell(r.status) +
          cell(error_text(r.error, r.frame_check), true) + cell(std::to_string(r.count)) +
          cell(r.status == reg::Status::done_ok ? std::to_string(r.index) : "-") +
@@ -217,15 +218,6 @@ std::string html_escape(const std::string& text) {
     }
   }
   return out;
-}
-
-std::string utc_time_text(double unix_ms) {
-  const std::time_t t = std::time_t(unix_ms / 1000);
-  std::tm tm{};
-  gmtime_r(&t, &tm);
-  char s[32];
-  std::strftime(s, sizeof s, "%Y-%m-%d %H:%M:%S", &tm);
-  return s;
 }
 
 const char* command_name(std::uint16_t command) {
