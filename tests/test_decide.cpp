@@ -6,10 +6,10 @@
 namespace pipeloc {
 namespace {
 
-// A verification of 1000 model pixels with the given counts.
+// A verification of 1000 model pixels (all judged for free space) with the given counts.
 Verification seen(int agree_px, int free_space_px, int occluded_px) {
   Verification v;
-  v.model_px = 1000;
+  v.model_px = v.inner_px = 1000;
   v.agree_px = agree_px, v.free_space_px = free_space_px, v.occluded_px = occluded_px;
   return v;
 }

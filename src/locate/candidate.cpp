@@ -259,6 +259,7 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
     e.model_to_cam = ctx.bin_to_cam * refined.pose;
     e.check = verify_pose(lm.verify_mesh, lm.verify_winding, e.model_to_cam, ctx.depth, ctx.camera,
                           float(cfg.verify_tolerance_mm), float(cfg.side_drop_of_d) * lm.tube_d_mm,
+                          free_space_band_px(cfg, lm, ctx.camera, e.model_to_cam),
                           &buf->scratch_depth, &buf->scratch_mesh);
     if (!std::isnan(ctx.lowest_surface_z_mm))
       e.check.below_floor = share_below(lm.verify_mesh, e.model_to_bin,

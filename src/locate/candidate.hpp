@@ -94,6 +94,12 @@ Decision decide(const Evidence& evidence, const LocateConfig& cfg);
 inline float residual_max_mm(const LocateConfig& cfg, float tube_d_mm) {
   return float(cfg.residual_max_of_d) * tube_d_mm;
 }
+// The free-space band of verify_pose() in pixels at the distance of the model's centroid.
+inline int free_space_band_px(const LocateConfig& cfg, const LocatorModel& lm, const Intrinsics& k,
+                              const Pose& model_to_cam) {
+  const double z = (model_to_cam * lm.centroid.cast<double>()).z();
+  return z > 0 ? int(cfg.free_space_band_of_d * lm.tube_d_mm * k.fx / z + 0.5) : 0;
+}
 // How well the image confirms a hypothesis: what ranks hypotheses and finds ambiguities.
 inline float hypothesis_quality(const Verification& v) {
   return v.agreement() - kFreeSpaceWeight * v.free_space();

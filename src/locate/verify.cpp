@@ -14,7 +14,7 @@ constexpr int kSideStepPx = 2;
 
 Verification verify_pose(const Mesh& mesh, Winding winding, const Pose& model_to_cam,
                          const Image<float>& depth, const Intrinsics& k, float tol, float side_drop_mm,
-                         Image<float>* scratch, ProjectedMesh* projected) {
+                         int free_band_px, Image<float>* scratch, ProjectedMesh* projected) {
   Verification v;
   const PixelBox box = render_depth_in_box(mesh, model_to_cam, k, scratch, projected, winding);
   const auto model_at = [&](int x, int y) {
@@ -28,6 +28,12 @@ Verification verify_pose(const Mesh& mesh, Winding winding, const Pose& model_to
     if (!(zo > 0) || zo < zm - tol) return;  // no reading, or something in front: neither
     ++v.side_px;
     v.side_level_px += zo <= zm + side_drop_mm;
+  };
+  // An inner pixel: the model goes on for the rim and the band in each of the four directions.
+  const auto inner = [&](int x, int y) {
+    for (int s = 2; s <= 1 + free_band_px; ++s)
+      if (!model_at(x - s, y) || !model_at(x + s, y) || !model_at(x, y - s) || !model_at(x, y + s)) return false;
+    return true;
   };
   for (int y = box.y0; y <= box.y1; ++y)
     for (int x = box.x0; x <= box.x1; ++x) {
@@ -44,10 +50,12 @@ Verification verify_pose(const Mesh& mesh, Winding winding, const Pose& model_to
         continue;
       }
       ++v.model_px;
+      const bool judged_for_free_space = inner(x, y);
+      v.inner_px += judged_for_free_space;
       const float zo = depth.at(x, y);
       if (!(zo > 0)) continue;  // no reading: neither for nor against
       if (zo > zm + tol)
-        ++v.free_space_px;
+        v.free_space_px += judged_for_free_space;
       else if (zo < zm - tol)
         ++v.occluded_px;
       else
