@@ -10,7 +10,7 @@ namespace {
 Verification seen(int agree_px, int free_space_px, int occluded_px) {
   Verification v;
   v.model_px = v.inner_px = 1000;
-  v.agree_px = agree_px, v.free_space_px = free_space_px, v.occluded_px = occluded_px;
+  v.agree_px = agree_px, v.free_space_px = v.inner_free_space_px = free_space_px, v.occluded_px = occluded_px;
   return v;
 }
 

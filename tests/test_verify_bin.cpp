@@ -112,7 +112,7 @@ TEST(BinAwareVerification, FreeSpaceIsJudgedInsideTheRimBand) {
     return verify_pose(lm.verify_mesh, lm.verify_winding, m2c, s.depth_mm, s.camera.intrinsics,
                        float(cfg.verify_tolerance_mm), float(cfg.side_drop_of_d) * float(tube_mm), band,
                        &scratch, &projected)
-        .free_space();
+        .inner_free_space();
   };
   int top = 0, pass_rim_only = 0, pass_banded = 0, off_rejected = 0, off_rejected_rim_only = 0;
   for (std::size_t g = 0; g < s.info.size(); ++g) {

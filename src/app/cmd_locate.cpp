@@ -41,6 +41,7 @@ Json estimate_json(const PipeEstimate& e, int rank, bool pick) {
           {"refine_rms_mm", e.refine_rms_mm},
           {"agreement", e.check.agreement()},
           {"free_space", e.check.free_space()},
+          {"inner_free_space", e.check.inner_free_space()},
           {"occluded", e.check.occluded()},
           {"side_level", e.check.side_level()},
           {"model_px", e.check.model_px}};
@@ -98,6 +99,8 @@ void add_locate(CLI::App& app) {
         const Pose ridge_to_cam = bin_to_cam * tr.ridge_pose;
         std::cout << Json{{"candidate", c},
                           {"outcome", outcome_name(tr.outcome)},
+                          {"region_centre_mm", translation_mm(bin_to_cam * Pose(Eigen::Translation3d(
+                                                   tr.axis.centre.cast<double>())))},
                           {"ridge_points", tr.ridge_count},
                           {"ridge_residual_mm", tr.ridge_cost_mm},
                           {"ridge_R", rotation_rowmajor(ridge_to_cam)},
@@ -106,6 +109,7 @@ void add_locate(CLI::App& app) {
                           {"refined_t_mm", translation_mm(tr.refined_to_cam)},
                           {"agreement", tr.check.agreement()},
                           {"free_space", tr.check.free_space()},
+                          {"inner_free_space", tr.check.inner_free_space()},
                           {"occluded", tr.check.occluded()},
                           {"side_level", tr.check.side_level()}}
                          .dump()
@@ -115,9 +119,11 @@ void add_locate(CLI::App& app) {
     spdlog::info(
         "{} pipes found ({} candidate regions, {} cores ({} split off touching pipes), {} of them in a "
         "larger "
-        "one's region, {} grown mostly into earlier regions) in {:.1f} ms; pick: {}",
+        "one's region, {} grown mostly into earlier regions; {} shorter than a * L, {} not convex, {} leaked) "
+        "in {:.1f} ms; pick: {}",
         out.estimates.size(), out.regions.candidates, out.regions.cores_kept, out.regions.split_cores,
-        out.regions.claimed, out.regions.overlapping, out.times.total_ms,
+        out.regions.claimed, out.regions.overlapping, out.regions.short_regions, out.regions.not_convex,
+        out.regions.leaked, out.times.total_ms,
         pick >= 0 ? "rank " + std::to_string(pick) : std::string("none"));
     const StageTimes& st = out.times;
     if (out.noise.samples > 0)
@@ -136,9 +142,10 @@ void add_locate(CLI::App& app) {
       const CandidateTrace& tr = out.traces[c];
       spdlog::info(
           "candidate {}: {} (ridge points {}, ridge residual {:.2f} mm, axis sections {}, agreement {:.2f}, "
-          "free space {:.2f}, occluded {:.2f}, sides level {:.2f})",
+          "free space {:.2f} (inside the rim band {:.2f}), occluded {:.2f}, sides level {:.2f})",
           c, outcome_name(tr.outcome), tr.ridge_count, tr.ridge_cost_mm, tr.axis.best_count,
-          tr.check.agreement(), tr.check.free_space(), tr.check.occluded(), tr.check.side_level());
+          tr.check.agreement(), tr.check.free_space(), tr.check.inner_free_space(), tr.check.occluded(),
+          tr.check.side_level());
     }
     if (!opt->overlay.empty()) {
       write_rgb_png(opt->overlay, draw_locate_overlay(locator, depth, sized));

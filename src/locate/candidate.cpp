@@ -45,7 +45,7 @@ constexpr Check kChecks[] = {
      }},
     {CandidateStage::hypotheses, CandidateOutcome::not_confirmed,
      [](const Evidence& e, const LocateConfig& cfg) {
-       return !(e.best.free_space() > float(cfg.verify_max_free_space));
+       return !(e.best.inner_free_space() > float(cfg.verify_max_free_space));
      }},
     // Beyond the paper: a smooth blob fits a pipe's top as well as a pipe does, but a pipe's sides
     // drop away from it (too few side pixels say nothing: a pipe among shadows).

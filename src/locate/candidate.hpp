@@ -100,7 +100,9 @@ inline int free_space_band_px(const LocateConfig& cfg, const LocatorModel& lm, c
   const double z = (model_to_cam * lm.centroid.cast<double>()).z();
   return z > 0 ? int(cfg.free_space_band_of_d * lm.tube_d_mm * k.fx / z + 0.5) : 0;
 }
-// How well the image confirms a hypothesis: what ranks hypotheses and finds ambiguities.
+// How well the image confirms a hypothesis: what ranks hypotheses and finds ambiguities. Two
+// hypotheses of one region are compared on every pixel, the rim band included: where a
+// near-symmetric pipe and its twin differ by a few millimetres, the band is what tells them apart.
 inline float hypothesis_quality(const Verification& v) {
   return v.agreement() - kFreeSpaceWeight * v.free_space();
 }

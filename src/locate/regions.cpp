@@ -335,7 +335,10 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
       found = box.longer_than(float(cfg.region_min_extent_of_l) * l, zb, cells, count);
       if (held_back < 0) break;  // the limit held nothing back: growing on adds nothing
     }
-    if (!found) continue;
+    if (!found) {
+      ++(leaked ? stats.leaked : !convex() ? stats.not_convex : stats.short_regions);
+      continue;
+    }
     // A region lying mostly in earlier ones is another piece of a pipe already taken up (a top
     // strip broken into pieces whose cores lay apart).
     if (float(claimed(cells, count)) > float(cfg.region_max_claimed_share) * float(count)) {

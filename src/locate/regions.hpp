@@ -41,6 +41,9 @@ struct RegionStats {
   int claimed = 0;       // cores lying mostly in an earlier candidate region: one pipe, not grown again
   int split_cores = 0;   // cores kept from too long ones split along valleys (touching pipes)
   int overlapping = 0;   // grown regions lying mostly in earlier candidate regions: one pipe, not tried again
+  int leaked = 0;        // grown over far more than one pipe
+  int not_convex = 0;    // the cells beside the core do not tilt away from it (floor between pipes)
+  int short_regions = 0; // shorter than a * L
 };
 
 void reserve_regions(RegionBuffers* rb, const ZBuffer& zb, const LocateConfig& cfg, float tube_d_mm,

@@ -54,8 +54,10 @@ Verification verify_pose(const Mesh& mesh, Winding winding, const Pose& model_to
       v.inner_px += judged_for_free_space;
       const float zo = depth.at(x, y);
       if (!(zo > 0)) continue;  // no reading: neither for nor against
-      if (zo > zm + tol)
-        v.free_space_px += judged_for_free_space;
+      if (zo > zm + tol) {
+        ++v.free_space_px;
+        v.inner_free_space_px += judged_for_free_space;
+      }
       else if (zo < zm - tol)
         ++v.occluded_px;
       else

@@ -17,12 +17,15 @@ namespace pipeloc {
 struct Verification {
   int model_px = 0;       // pixels the model covers in the image, less its one-pixel rim
   int agree_px = 0;       // measured depth within tolerance of the model
-  int free_space_px = 0;  // measured farther: the sensor saw through where the model would be,
-                          // counted on the inner pixels only
-  int inner_px = 0;       // model pixels farther than the free-space band from the silhouette
+  int free_space_px = 0;  // measured farther: the sensor saw through where the model would be
+  int inner_px = 0;       // model pixels farther than the free-space band from the rim ...
+  int inner_free_space_px = 0;  // ... and those of them the sensor saw through
   int occluded_px = 0;    // measured nearer: something lies in front (another pipe, or the pose sank in)
   float agreement() const { return model_px ? float(agree_px) / float(model_px) : 0.f; }
-  float free_space() const { return inner_px ? float(free_space_px) / float(inner_px) : 1.f; }
+  float free_space() const { return model_px ? float(free_space_px) / float(model_px) : 1.f; }
+  // What the free-space check judges: a right pose a little to the side, or a sensor blending
+  // fore- and background at the edge, sees through the model in the band; not inside it.
+  float inner_free_space() const { return inner_px ? float(inner_free_space_px) / float(inner_px) : 1.f; }
   float occluded() const { return model_px ? float(occluded_px) / float(model_px) : 1.f; }
   // Just beyond the silhouette: a pipe's sides drop away from it (to the pipes beneath or the
   // floor); the surface of a smooth blob goes on at the silhouette's depth.
@@ -41,8 +44,7 @@ constexpr int kMinSidePx = 20;
 // scratch: camera-sized image whose contents are overwritten in the model's box; projected:
 // reserved for the mesh. winding: of the mesh, if closed (its back faces are then not drawn).
 // side_drop_mm: how far beyond its silhouette a pipe's surroundings lie at least (a share of D).
-// free_band_px: the pixels this close inside the rim are not judged for free space: a pose off by
-// that much laterally, or a sensor blending fore- and background there, sees the background in it.
+// free_band_px: the pixels this close inside the rim are left out of inner_free_space().
 Verification verify_pose(const Mesh& mesh, Winding winding, const Pose& model_to_cam,
                          const Image<float>& depth_mm, const Intrinsics& k, float tolerance_mm,
                          float side_drop_mm, int free_band_px, Image<float>* scratch,
