@@ -123,6 +123,19 @@ TEST(CalibrateBin, RandomDepthsHaveNoFloor) {
   EXPECT_NE(empty.error.find("valid depth pixels"), std::string::npos) << empty.error;
 }
 
+// A floor crossed by two raised bars: their edges are found as walls whose inner faces cross, and
+// the bin is refused instead of given an interior of negative size.
+TEST(CalibrateBin, WallsThatLeaveNoInteriorAreRefused) {
+  const Intrinsics k;
+  Image<float> depth(k.width, k.height, 1000.0f);
+  for (int v = 0; v < k.height; ++v)
+    for (int u = 0; u < k.width; ++u)
+      if ((v > 225 && v < 255) || (u > 305 && u < 335)) depth.at(u, v) = 940;
+  const BinCalib calib = calibrate_bin(depth, k);
+  EXPECT_FALSE(calib.ok);
+  EXPECT_NE(calib.error.find("leave no interior"), std::string::npos) << calib.error;
+}
+
 TEST(CalibrateBin, TomlLoadsAsConfig) {
   const PipeModel model = coarse_model("sbend");
   std::mt19937 rng(2);

@@ -182,6 +182,17 @@ BinCalib calibrate_bin(const Image<float>& depth, const Intrinsics& k, const Bin
   }
   const Eigen::Vector3d centre = origin0 + 0.5 * (a_lo + a_hi) * ea + 0.5 * (b_lo + b_hi) * eb;
   const double la = a_hi - a_lo, lb = b_hi - b_lo;
+  // Faces crossing each other (something standing on the floor taken for walls) leave no interior.
+  if (!(la > 2 * params.roi_margin_mm && lb > 2 * params.roi_margin_mm)) {
+    std::ostringstream why;
+    why.setf(std::ios::fixed);
+    why.precision(1);
+    why << "floor found, but the walls found around it leave no interior (" << la << " x " << lb
+        << " mm between their inner faces, " << params.roi_margin_mm
+        << " mm margin each side): is the whole bin in view?";
+    out.error = why.str();
+    return out;
+  }
   Eigen::Vector3d x_axis = la >= lb ? ea : eb;
   if (x_axis.x() < 0) x_axis = -x_axis;
   out.interior_x_mm = la >= lb ? la : lb;
