@@ -24,8 +24,11 @@ struct Verification {
   float agreement() const { return model_px ? float(agree_px) / float(model_px) : 0.f; }
   float free_space() const { return model_px ? float(free_space_px) / float(model_px) : 1.f; }
   // What the free-space check judges: a right pose a little to the side, or a sensor blending
-  // fore- and background at the edge, sees through the model in the band; not inside it.
-  float inner_free_space() const { return inner_px ? float(inner_free_space_px) / float(inner_px) : 1.f; }
+  // fore- and background at the edge, sees through the model in the band; not inside it. A
+  // silhouette too thin to have inner pixels is judged on all of them.
+  float inner_free_space() const {
+    return inner_px ? float(inner_free_space_px) / float(inner_px) : free_space();
+  }
   float occluded() const { return model_px ? float(occluded_px) / float(model_px) : 1.f; }
   // Just beyond the silhouette: a pipe's sides drop away from it (to the pipes beneath or the
   // floor); the surface of a smooth blob goes on at the silhouette's depth.
