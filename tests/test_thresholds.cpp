@@ -3,6 +3,7 @@
 
 #include <random>
 
+#include "locate/candidate.hpp"
 #include "locate/thresholds.hpp"
 
 namespace pipeloc {
@@ -64,14 +65,35 @@ TEST(Thresholds, FollowTheTubeAndTheNoiseUnlessGiven) {
   EXPECT_NEAR(paper.verify_tolerance_mm, 7, 0.5);
   EXPECT_NEAR(paper.refine_inlier_mm, 4, 0.5);
   EXPECT_NEAR(paper.normal_window_mm, 6.3, 0.1);
-  // A value given is used as given.
+  // A value given is used as given, unless raise_to_noise raises it to what the noise needs.
   LocateConfig pinned = user;
   pinned.verify_tolerance_mm = 5;
   pinned.hole_fill_mm = 3;
+  LocateConfig raised = with_model_thresholds(pinned, 40);
+  set_frame_thresholds(pinned, 40, DepthNoise{3.0f, 1000, 100000}, k, &raised);
+  EXPECT_EQ(raised.verify_tolerance_mm, 9);  // 3 sigma
+  EXPECT_EQ(raised.hole_fill_mm, 3);
+  set_frame_thresholds(pinned, 40, DepthNoise{1.0f, 1000, 100000}, k, &raised);
+  EXPECT_EQ(raised.verify_tolerance_mm, 5);
+  pinned.raise_to_noise = false;
   LocateConfig in_effect = with_model_thresholds(pinned, 40);
   set_frame_thresholds(pinned, 40, DepthNoise{3.0f, 1000, 100000}, k, &in_effect);
   EXPECT_EQ(in_effect.verify_tolerance_mm, 5);
   EXPECT_EQ(in_effect.hole_fill_mm, 3);
+}
+
+// R_th is 0.35 D unless the frame's noise needs more: a 12 mm tube under 4 mm of noise (an
+// active-stereo sensor at 1.2 m) has right ridge fits 5-6.5 mm from its ridge.
+TEST(Thresholds, RidgeResidualBoundFollowsTheNoiseOfThinTubes) {
+  LocateConfig cfg;
+  set_frame_thresholds(cfg, 12, DepthNoise{4.0f, 1150, 100000}, Intrinsics{}, &cfg);
+  EXPECT_NEAR(residual_max_mm(cfg, 12), 1.8 * 4.0, 1e-5);
+  set_frame_thresholds(cfg, 12, DepthNoise{1.0f, 600, 100000}, Intrinsics{}, &cfg);
+  EXPECT_NEAR(residual_max_mm(cfg, 12), 0.35 * 12, 1e-5);
+  LocateConfig fixed;
+  fixed.raise_to_noise = false;
+  set_frame_thresholds(fixed, 12, DepthNoise{4.0f, 1150, 100000}, Intrinsics{}, &fixed);
+  EXPECT_NEAR(residual_max_mm(fixed, 12), 0.35 * 12, 1e-5);
 }
 
 }  // namespace

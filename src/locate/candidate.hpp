@@ -5,6 +5,7 @@
 // outcome.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 
 #include <atomic>
@@ -92,7 +93,7 @@ Decision decide(const Evidence& evidence, const LocateConfig& cfg);
 
 // R_th of Algorithm 2: ridge fits with a larger residual are not pursued.
 inline float residual_max_mm(const LocateConfig& cfg, float tube_d_mm) {
-  return float(cfg.residual_max_of_d) * tube_d_mm;
+  return std::max(float(cfg.residual_max_of_d) * tube_d_mm, float(cfg.residual_noise_floor_mm));
 }
 // The free-space band of verify_pose() in pixels at the distance of the model's centroid.
 inline int free_space_band_px(const LocateConfig& cfg, const LocatorModel& lm, const Intrinsics& k,

@@ -18,6 +18,10 @@ struct LocateConfig {
   // II-A: Z-buffer and normals.
   double zbuffer_pixel_mm = 1.0;        // the paper's 1 mm cells
   double zbuffer_max_side_mm = 1600;    // the Z-buffer covers at most this square of the bin
+  // The frame's depth noise is measured (locate/thresholds.cpp) and R_th and the verification's
+  // tolerance are raised to what it needs when it needs more (1.8 and 3 sigma): a thin tube far
+  // from a noisy sensor. Off: the values below alone.
+  bool raise_to_noise = true;
   // A length in mm left at 0 is derived (locate/thresholds.cpp): hole fill and normal window from
   // D, the noise-dependent three from the depth noise measured in each frame. The defaults are the
   // fixed values: derived, they cost recall on the zoo and the dev set (docs/experiments.md,
@@ -70,6 +74,7 @@ struct LocateConfig {
   int icp_fine_iterations = 8;     // the last this many on ridge_cell_mm, the others on the probe cells
   double icp_converged_mm = 0.05;
   double residual_max_of_d = 0.35;  // R_th = this * D (mean ridge distance; verification follows)
+  double residual_noise_floor_mm = 0;  // R_th is at least this (set per frame by raise_to_noise, not a key)
 
   // Beyond the paper: surface refinement, verification, ambiguity.
   int refine_iterations = 12;

@@ -32,6 +32,9 @@ constexpr double kHoleFillOfD = 0.44;
 // the noise (an active-stereo sensor at 0.6 m measures a third of it):
 // two neighbouring cells of one surface differ by at most 3.4 sigma (2.4 sigma of the difference);
 constexpr double kContinuityStepOfSigma = 3.4, kContinuityStepMinCells = 1.5;
+// R_th with raise_to_noise: a right ridge fit's mean distance, 1.2-1.6 sigma where the noise
+// outweighs the fit's own error (stereo at 1.1 m);
+constexpr double kResidualOfSigma = 1.8;
 // the verification's depth tolerance: 3 sigma, and never under the refined pose's own error;
 constexpr double kVerifyToleranceOfSigma = 3.0, kVerifyToleranceMinMm = 2.5;
 // the refinement's inlier gate: 1.7 sigma, or a fifth of the tube (the ridge fit's own error);
@@ -109,8 +112,11 @@ void set_frame_thresholds(const LocateConfig& user, float d, const DepthNoise& n
         std::max(kContinuityStepOfSigma * sigma, kContinuityStepMinCells * cfg->zbuffer_pixel_mm);
   if (user.verify_tolerance_mm <= 0)
     cfg->verify_tolerance_mm = std::max(kVerifyToleranceOfSigma * sigma, kVerifyToleranceMinMm);
+  else if (user.raise_to_noise)
+    cfg->verify_tolerance_mm = std::max(user.verify_tolerance_mm, kVerifyToleranceOfSigma * sigma);
   if (user.refine_inlier_mm <= 0)
     cfg->refine_inlier_mm = std::max(kRefineInlierOfSigma * sigma, kRefineInlierOfD * double(d));
+  cfg->residual_noise_floor_mm = user.raise_to_noise ? kResidualOfSigma * sigma : 0.0;
   if (user.normal_window_mm <= 0) {
     const double footprint_mm = double(noise.depth_mm) / std::max(1.0, camera.fx);
     cfg->normal_window_mm = std::max(kNormalWindowOfD * d, kNormalWindowMinFootprints * footprint_mm);
@@ -119,7 +125,7 @@ void set_frame_thresholds(const LocateConfig& user, float d, const DepthNoise& n
 
 bool derives_from_frame(const LocateConfig& user) {
   return user.continuity_step_max_mm <= 0 || user.verify_tolerance_mm <= 0 || user.refine_inlier_mm <= 0 ||
-         user.normal_window_mm <= 0;
+         user.normal_window_mm <= 0 || user.raise_to_noise;
 }
 
 float max_refine_inlier_mm(const LocateConfig& user, float d) {
