@@ -15,6 +15,7 @@ Verification seen(int agree_px, int free_space_px, int occluded_px) {
 }
 
 constexpr float kD = 20;  // tube diameter (mm): R_th = 0.35 * 20 = 7 mm at the default config
+constexpr float kL = 200;  // longest extent (mm): a ridge of 10 points is needed (short pipes: fewer)
 
 // The same with its sides read: `level` of `side_px` side pixels lie at the silhouette's depth.
 Verification with_sides(Verification v, int side_px, int level) {
@@ -27,9 +28,10 @@ Verification below_floor(Verification v, float share) {
   return v;
 }
 
-Evidence after_ridge(int ridge_points) {
+Evidence after_ridge(int ridge_points, float extent_l_mm = kL) {
   Evidence e;
   e.tube_d_mm = kD;
+  e.extent_l_mm = extent_l_mm;
   e.reached = CandidateStage::observed_ridge;
   e.ridge_points = ridge_points;
   return e;
@@ -75,6 +77,10 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
       // Rejected, at the first check that fails.
       {"few ridge points", after_ridge(kMinRidgePoints - 1), true, CandidateOutcome::few_ridge_points, false,
        false, 0},
+      // A 25 mm elbow: 0.4 L is 5 cells of 2 mm.
+      {"a short pipe's ridge", after_ridge(5, 25), false, CandidateOutcome::budget, false, false, 0},
+      {"too few for a short pipe", after_ridge(4, 25), true, CandidateOutcome::few_ridge_points, false, false,
+       0},
       {"residual above R_th", after_fits(7.1f), true, CandidateOutcome::residual_too_high, false, false, 0},
       {"agreement under 0.7", judged(seen(690, 0, 0)), true, CandidateOutcome::not_confirmed, false, false,
        0},

@@ -34,7 +34,9 @@ struct Check {
 // evidence no stage gives yet, a field of Evidence that the stage fills).
 constexpr Check kChecks[] = {
     {CandidateStage::observed_ridge, CandidateOutcome::few_ridge_points,
-     [](const Evidence& e, const LocateConfig&) { return e.ridge_points >= kMinRidgePoints; }},
+     [](const Evidence& e, const LocateConfig& cfg) {
+       return e.ridge_points >= min_ridge_points(cfg, e.extent_l_mm);
+     }},
     {CandidateStage::ridge_fits, CandidateOutcome::residual_too_high,
      [](const Evidence& e, const LocateConfig& cfg) {
        return e.least_ridge_cost_mm <= residual_max_mm(cfg, e.tube_d_mm);
@@ -325,6 +327,7 @@ bool work_candidate(const CandidateContext& ctx, const CandidateInput& in, const
                     CandidateBuffers* buf, CandidateTrace* trace, PipeEstimate* estimate) {
   Evidence evidence;
   evidence.tube_d_mm = ctx.lm.tube_d_mm;
+  evidence.extent_l_mm = ctx.lm.extent_l_mm;
   // Between two stages: decided by the evidence so far, or out of time. A candidate cut short
   // leaves no estimate (its outcome stays "budget").
   const auto settled = [&] {

@@ -22,8 +22,16 @@
 
 namespace pipeloc {
 
-// Fewer observed ridge points than this give no fit worth the ICP (IV-A): a sliver of a region.
+// Fewer observed ridge points than this give no fit worth the ICP (IV-A): a sliver of a region ...
 constexpr int kMinRidgePoints = 10;
+// ... or, for a short pipe, than cover this share of its length L (a 25 mm elbow's whole ridge is
+// 12 cells of 2 mm), but never fewer than kLeastRidgePoints.
+constexpr float kMinRidgeShareOfL = 0.4f;
+constexpr int kLeastRidgePoints = 4;
+inline int min_ridge_points(const LocateConfig& cfg, float extent_l_mm) {
+  const int of_l = int(kMinRidgeShareOfL * extent_l_mm / float(cfg.ridge_cell_mm));
+  return std::clamp(of_l, kLeastRidgePoints, kMinRidgePoints);
+}
 // Ranks verified hypotheses: a pixel the sensor saw through counts twice against the agreement,
 // since a model lying over empty space is wrong however much else it covers.
 constexpr float kFreeSpaceWeight = 2.0f;
@@ -71,6 +79,7 @@ enum class CandidateStage { axis, observed_ridge, ridge_fits, hypotheses };
 struct Evidence {
   CandidateStage reached = CandidateStage::axis;  // the last stage done
   float tube_d_mm = 0;                            // D of the model
+  float extent_l_mm = 0;                          // L of the model
   int ridge_points = 0;                           // observed_ridge: observed Z-ridge points
   float least_ridge_cost_mm = 1e30f;              // ridge_fits: least residual of the states continued
   bool have_best = false, have_second = false;    // hypotheses: the best judged, and a rival
