@@ -30,6 +30,23 @@ TEST(Locator, EndToEndPickIsATopPipe) {
   EXPECT_LE(s.info[g_best].occ_by_pipes, 0.15);
 }
 
+// The Locator works from its own copy of the config: the caller's may be a temporary, or change
+// after construction. The ridge ICP read the caller's, so here it stopped after one iteration.
+TEST(Locator, KeepsNoReferenceToTheCallersConfig) {
+  const PipeModel& model = preset_model("sbend");
+  const SimulatedScene s = pile_of(model, 10, 8);
+  LocateConfig cfg;
+  Locator kept(model, cfg, s.camera.intrinsics);
+  LocateConfig changed = cfg;
+  Locator loc(model, changed, s.camera.intrinsics);
+  changed.icp_converged_mm = 1e9;
+  const LocateOutput expected = kept.locate(s.depth_mm, s.camera);
+  const LocateOutput& out = loc.locate(s.depth_mm, s.camera);
+  ASSERT_EQ(out.estimates.size(), expected.estimates.size());
+  for (std::size_t i = 0; i < out.estimates.size(); ++i)
+    EXPECT_TRUE(out.estimates[i].model_to_cam.isApprox(expected.estimates[i].model_to_cam, 1e-9));
+}
+
 // A near-symmetric pipe (a half-turn swaps its ends and lands its surface within D/4 of itself):
 // where a pile shows only the common surface, the image cannot tell the pose from its twin. No
 // pose handed out as pickable may be the twin of a pipe instead of the pipe (106 mm off at the

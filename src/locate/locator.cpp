@@ -28,8 +28,10 @@ Locator::Locator(const PipeModel& model, const LocateConfig& cfg, const Intrinsi
     ridge_capacity_ = int(rb_.max_region_cells * cfg.zbuffer_pixel_mm * cfg.zbuffer_pixel_mm /
                           (cfg.ridge_cell_mm * cfg.ridge_cell_mm)) +
                       16;
+  // The buffers keep a pointer to the config (RidgeIcp): ours, not the caller's, which may be a
+  // temporary (ASan: stack-use-after-scope in RidgeIcp::iterate).
   for (Worker& wk : workers_)
-    reserve_candidate(&wk.buf, lm_, starts_, cfg, rb_.max_region_cells, ridge_capacity_, zb_.z.width,
+    reserve_candidate(&wk.buf, lm_, starts_, user_cfg_, rb_.max_region_cells, ridge_capacity_, zb_.z.width,
                       zb_.z.height, camera);
   ridge_pts_.assign(std::size_t(ridge_capacity_) * cfg.max_candidates, Eigen::Vector3f::Zero());
   slot_.resize(std::size_t(cfg.max_candidates));
