@@ -22,6 +22,14 @@ inline const PipeModel& preset_model(const std::string& name) {
   return it->second;
 }
 
+// A pipe made along a centreline path ("S40,B90r25,..." as make-pipe takes it) with a tube of d mm.
+inline PipeModel pipe_of(const std::string& path, double d, const std::string& name = "") {
+  PipeSpec spec;
+  spec.diameter_mm = d;
+  spec.segments = parse_centreline(path);
+  return derive_pipe_model(make_pipe(spec), name.empty() ? path : name);
+}
+
 inline double pose_error(const PipeModel& m, const Pose& a, const Pose& b) {
   std::vector<Eigen::Vector3d> v;
   for (const auto& p : m.mesh.vertices) v.push_back(p.cast<double>());

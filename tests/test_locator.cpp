@@ -54,10 +54,7 @@ TEST(Locator, KeepsNoReferenceToTheCallersConfig) {
 // judged, 13 of 40 pickable poses on these 12 piles were twins; with it, 1 of 7 (a twin the image
 // confirms better than the pipe's own pose, 0.92 against 0.75 agreement).
 TEST(Locator, NoPickablePoseIsTheTwinOfANearSymmetricPipe) {
-  PipeSpec spec;
-  spec.diameter_mm = 16;
-  spec.segments = parse_centreline("S30,B120r45t90,B90r45t90,S30");
-  const PipeModel model = derive_pipe_model(make_pipe(spec), "coil");
+  const PipeModel model = pipe_of("S30,B120r45t90,B90r45t90,S30", 16, "coil");
   ASSERT_EQ(model.near_symmetries.size(), 1u);
   const Pose& twin = model.near_symmetries[0];
   LocateConfig cfg;
@@ -84,10 +81,7 @@ TEST(Locator, NoPickablePoseIsTheTwinOfANearSymmetricPipe) {
 // own top (the ridge ICP ended more than D/2 from every ridge point in 6 of 11 regions of a pile
 // of 12 short tubes). With that turn left out, the top tubes of piles are found.
 TEST(Locator, StraightTubesOnAPileAreFound) {
-  PipeSpec spec;
-  spec.diameter_mm = 22;
-  spec.segments = parse_centreline("S85");
-  const PipeModel model = derive_pipe_model(make_pipe(spec), "straight");
+  const PipeModel model = pipe_of("S85", 22, "straight");
   LocateConfig cfg;
   int top = 0, found = 0;
   for (unsigned seed = 1; seed <= 3; ++seed) {
@@ -110,10 +104,7 @@ TEST(Locator, StraightTubesOnAPileAreFound) {
 // An arc slides along itself: where its ends are hidden the image fits the slid pose as well.
 // No pose handed out as pickable may lie more than 10 mm from every arc of the pile.
 TEST(Locator, NoPickablePoseIsAnArcSlidAlongItself) {
-  PipeSpec spec;
-  spec.diameter_mm = 20;
-  spec.segments = parse_centreline("B200r150");
-  const PipeModel model = derive_pipe_model(make_pipe(spec), "arc");
+  const PipeModel model = pipe_of("B200r150", 20, "arc");
   LocateConfig cfg;
   int pickable = 0, wrong = 0;
   for (unsigned seed = 1; seed <= 4; ++seed) {
@@ -133,10 +124,7 @@ TEST(Locator, NoPickablePoseIsAnArcSlidAlongItself) {
 // symmetry is found, so its twin is the same pick: no pose of it is ambiguous, and it is picked.
 // (One frame of the three finds no candidate on it at all: a detection miss, not an ambiguity.)
 TEST(Locator, AThinSymmetricPipeIsPickable) {
-  PipeSpec spec;
-  spec.diameter_mm = 10;
-  spec.segments = parse_centreline("S40,B90r25,B-90r25,S40");
-  const PipeModel model = derive_pipe_model(make_pipe(spec), "thin-s");
+  const PipeModel model = pipe_of("S40,B90r25,B-90r25,S40", 10, "thin-s");
   ASSERT_EQ(model.symmetries.size(), 1u);
   LocateConfig cfg;
   int right = 0, ambiguous = 0, picked_right = 0;

@@ -137,10 +137,7 @@ TEST(Segmentation, APipeBrokenIntoPiecesIsTriedOnce) {
 // and neither is tried. Split along the valley, each pipe gets a core of its own in some frames
 // (the valley is not always found whole), and no piece of the floor becomes a candidate.
 TEST(Segmentation, TouchingPipesSideBySideGetACoreEach) {
-  PipeSpec spec;
-  spec.diameter_mm = 20;
-  spec.segments = parse_centreline("S200");
-  const PipeModel model = derive_pipe_model(make_pipe(spec), "straight");
+  const PipeModel model = pipe_of("S200", 20, "straight");
   const double r = 10;
   const Eigen::Matrix3d axes = principal_axes(model.surface.points, model.centroid);
   Eigen::Matrix3d to_world;  // the model's long axis along world X

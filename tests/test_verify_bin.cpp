@@ -56,12 +56,7 @@ Scene straight_tube_scene(double axis_z_mm, double surround_z_mm, double tube_mm
   return s;
 }
 
-PipeModel straight_tube(double tube_mm = kTubeMm) {
-  PipeSpec spec;
-  spec.diameter_mm = tube_mm;
-  spec.segments = parse_centreline("S150");
-  return derive_pipe_model(make_pipe(spec), "straight");
-}
+PipeModel straight_tube(double tube_mm = kTubeMm) { return pipe_of("S150", tube_mm, "straight"); }
 
 // The model drawn at the true pose: its sides drop away on the floor, and stay level on a blob
 // whose flanks go on from its silhouette (decide() rejects a pose over 0.6 level: test_decide).

@@ -26,25 +26,31 @@ AppConfig config_or_default(const std::string& path) {
   return cfg;
 }
 
+// What the depth image said of a pose (an estimate's, or a candidate's best refined fit).
+Json verification_json(const Verification& v) {
+  return {{"agreement", v.agreement()},
+          {"free_space", v.free_space()},
+          {"inner_free_space", v.inner_free_space()},
+          {"occluded", v.occluded()},
+          {"side_level", v.side_level()}};
+}
+
 Json estimate_json(const PipeEstimate& e, int rank, bool pick) {
-  return {{"rank", rank},
-          {"pick", pick},
-          {"score", e.score},
-          {"R", rotation_rowmajor(e.model_to_cam)},
-          {"t_mm", translation_mm(e.model_to_cam)},
-          {"pickable", e.pickable},
-          {"ambiguous", e.ambiguous},
-          {"ridge_residual_mm", e.ridge_cost_mm},
-          {"ridge_points", e.ridge_points},
-          {"refine_inliers", e.refine_inliers},
-          {"refine_points", e.refine_points},
-          {"refine_rms_mm", e.refine_rms_mm},
-          {"agreement", e.check.agreement()},
-          {"free_space", e.check.free_space()},
-          {"inner_free_space", e.check.inner_free_space()},
-          {"occluded", e.check.occluded()},
-          {"side_level", e.check.side_level()},
-          {"model_px", e.check.model_px}};
+  Json j = {{"rank", rank},
+            {"pick", pick},
+            {"score", e.score},
+            {"R", rotation_rowmajor(e.model_to_cam)},
+            {"t_mm", translation_mm(e.model_to_cam)},
+            {"pickable", e.pickable},
+            {"ambiguous", e.ambiguous},
+            {"ridge_residual_mm", e.ridge_cost_mm},
+            {"ridge_points", e.ridge_points},
+            {"refine_inliers", e.refine_inliers},
+            {"refine_points", e.refine_points},
+            {"refine_rms_mm", e.refine_rms_mm},
+            {"model_px", e.check.model_px}};
+  j.update(verification_json(e.check));
+  return j;
 }
 
 }  // namespace
@@ -97,23 +103,18 @@ void add_locate(CLI::App& app) {
       for (std::size_t c = 0; c < out.traces.size(); ++c) {
         const CandidateTrace& tr = out.traces[c];
         const Pose ridge_to_cam = bin_to_cam * tr.ridge_pose;
-        std::cout << Json{{"candidate", c},
-                          {"outcome", outcome_name(tr.outcome)},
-                          {"region_centre_mm", translation_mm(bin_to_cam * Pose(Eigen::Translation3d(
-                                                   tr.axis.centre.cast<double>())))},
-                          {"ridge_points", tr.ridge_count},
-                          {"ridge_residual_mm", tr.ridge_cost_mm},
-                          {"ridge_R", rotation_rowmajor(ridge_to_cam)},
-                          {"ridge_t_mm", translation_mm(ridge_to_cam)},
-                          {"refined_R", rotation_rowmajor(tr.refined_to_cam)},
-                          {"refined_t_mm", translation_mm(tr.refined_to_cam)},
-                          {"agreement", tr.check.agreement()},
-                          {"free_space", tr.check.free_space()},
-                          {"inner_free_space", tr.check.inner_free_space()},
-                          {"occluded", tr.check.occluded()},
-                          {"side_level", tr.check.side_level()}}
-                         .dump()
-                  << '\n';
+        Json j = {{"candidate", c},
+                  {"outcome", outcome_name(tr.outcome)},
+                  {"region_centre_mm",
+                   translation_mm(bin_to_cam * Pose(Eigen::Translation3d(tr.axis.centre.cast<double>())))},
+                  {"ridge_points", tr.ridge_count},
+                  {"ridge_residual_mm", tr.ridge_cost_mm},
+                  {"ridge_R", rotation_rowmajor(ridge_to_cam)},
+                  {"ridge_t_mm", translation_mm(ridge_to_cam)},
+                  {"refined_R", rotation_rowmajor(tr.refined_to_cam)},
+                  {"refined_t_mm", translation_mm(tr.refined_to_cam)}};
+        j.update(verification_json(tr.check));
+        std::cout << j.dump() << '\n';
       }
     }
     spdlog::info(
