@@ -12,6 +12,23 @@
 namespace pipeloc {
 namespace {
 
+// Calls f(estimate, scene) for each pickable estimate the default localizer hands out on piles
+// of `pipes` of the model (seeds 1..seeds); returns how many there were.
+template <typename F>
+int for_each_pickable(const PipeModel& model, int pipes, unsigned seeds, F f) {
+  int pickable = 0;
+  for (unsigned seed = 1; seed <= seeds; ++seed) {
+    const SimulatedScene s = pile_of(model, pipes, seed);
+    Locator loc(model, LocateConfig{}, s.camera.intrinsics);
+    for (const PipeEstimate& e : loc.locate(s.depth_mm, s.camera).estimates) {
+      if (!e.pickable) continue;
+      ++pickable;
+      f(e, s);
+    }
+  }
+  return pickable;
+}
+
 TEST(Locator, EndToEndPickIsATopPipe) {
   const PipeModel& model = preset_model("sbend");
   const SimulatedScene s = pile_of(model, 10, 8);
@@ -57,22 +74,15 @@ TEST(Locator, NoPickablePoseIsTheTwinOfANearSymmetricPipe) {
   const PipeModel model = pipe_of("S30,B120r45t90,B90r45t90,S30", 16, "coil");
   ASSERT_EQ(model.near_symmetries.size(), 1u);
   const Pose& twin = model.near_symmetries[0];
-  LocateConfig cfg;
-  int pickable = 0, twins_picked = 0;
-  for (unsigned seed = 1; seed <= 12; ++seed) {
-    const SimulatedScene s = pile_of(model, 20, seed);
-    Locator loc(model, cfg, s.camera.intrinsics);
-    for (const PipeEstimate& e : loc.locate(s.depth_mm, s.camera).estimates) {
-      if (!e.pickable) continue;
-      ++pickable;
-      double at_truth = 1e9, at_twin = 1e9;
-      for (std::size_t g = 0; g < s.model_to_world.size(); ++g) {
-        at_truth = std::min(at_truth, pose_error(model, e.model_to_cam, s.model_to_cam(g)));
-        at_twin = std::min(at_twin, pose_error(model, e.model_to_cam, s.model_to_cam(g) * twin));
-      }
-      twins_picked += at_truth > 10 && at_twin < 5;
+  int twins_picked = 0;
+  const int pickable = for_each_pickable(model, 20, 12, [&](const PipeEstimate& e, const SimulatedScene& s) {
+    double at_truth = 1e9, at_twin = 1e9;
+    for (std::size_t g = 0; g < s.model_to_world.size(); ++g) {
+      at_truth = std::min(at_truth, pose_error(model, e.model_to_cam, s.model_to_cam(g)));
+      at_twin = std::min(at_twin, pose_error(model, e.model_to_cam, s.model_to_cam(g) * twin));
     }
-  }
+    twins_picked += at_truth > 10 && at_twin < 5;
+  });
   EXPECT_GE(pickable, 1);
   EXPECT_LE(5 * twins_picked, pickable) << twins_picked << " of " << pickable << " pickable poses are twins";
 }
@@ -105,17 +115,10 @@ TEST(Locator, StraightTubesOnAPileAreFound) {
 // No pose handed out as pickable may lie more than 10 mm from every arc of the pile.
 TEST(Locator, NoPickablePoseIsAnArcSlidAlongItself) {
   const PipeModel model = pipe_of("B200r150", 20, "arc");
-  LocateConfig cfg;
-  int pickable = 0, wrong = 0;
-  for (unsigned seed = 1; seed <= 4; ++seed) {
-    const SimulatedScene s = pile_of(model, 10, seed);
-    Locator loc(model, cfg, s.camera.intrinsics);
-    for (const PipeEstimate& e : loc.locate(s.depth_mm, s.camera).estimates) {
-      if (!e.pickable) continue;
-      ++pickable;
-      wrong += nearest_pipe_error(model, e.model_to_cam, s) > 10;
-    }
-  }
+  int wrong = 0;
+  const int pickable = for_each_pickable(model, 10, 4, [&](const PipeEstimate& e, const SimulatedScene& s) {
+    wrong += nearest_pipe_error(model, e.model_to_cam, s) > 10;
+  });
   EXPECT_GE(pickable, 1);
   EXPECT_EQ(wrong, 0) << wrong << " of " << pickable << " pickable poses are more than 10 mm off";
 }

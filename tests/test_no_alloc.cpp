@@ -98,6 +98,15 @@ TEST(NoAllocation, FiftyCyclesOnSimulatedFramesAllocateNothing) {
 // The service's 50 LOCATE cycles after the first, as the PLC thread runs them: the cycle, the
 // register contents and the timing-log line (and the status board, if `publish_status`) counted;
 // the pick's effect on the bin between cycles not.
+// The sim source's service with a budget no cycle reaches: how many cycles find a pose must not
+// depend on the machine's load.
+AppConfig service_config(const test::TempDir& dir) {
+  AppConfig cfg = test::sim_config(dir, 15, 9);
+  cfg.service.summary_every = 10;
+  cfg.service.budget_ms = 60000;
+  return cfg;
+}
+
 struct CountedCycles {
   long allocations = 0;
   int done_ok = 0;
@@ -126,9 +135,7 @@ CountedCycles count_service_cycles(Service& service, const AppConfig& cfg, bool 
 TEST(NoAllocation, FiftyServiceCyclesOnTheSimSourceAllocateNothing) {
   static const PipeModel model = derive_pipe_model(make_pipe(pipe_preset("sbend")), "sbend");
   test::TempDir dir;
-  AppConfig cfg = test::sim_config(dir, 15, 9);
-  cfg.service.summary_every = 10;
-  cfg.service.budget_ms = 60000;  // how many cycles find a pose must not depend on the machine's load
+  AppConfig cfg = service_config(dir);
   Service service(cfg, model, std::make_unique<SimSource>(model, cfg.source.sim));
   service.run(1, 1, Clock::now());  // the first cycle may settle
   service.log().write(service.record());
@@ -144,9 +151,7 @@ TEST(NoAllocation, FiftyServiceCyclesOnTheSimSourceAllocateNothing) {
 TEST(NoAllocation, FiftyServiceCyclesAllocateNothingWithTheStatusPagePolled) {
   static const PipeModel model = derive_pipe_model(make_pipe(pipe_preset("sbend")), "sbend");
   test::TempDir dir;
-  AppConfig cfg = test::sim_config(dir, 15, 9);
-  cfg.service.summary_every = 10;
-  cfg.service.budget_ms = 60000;  // how many cycles find a pose must not depend on the machine's load
+  AppConfig cfg = service_config(dir);
   cfg.status.enabled = true;
   cfg.status.port = 0;  // any free port
   cfg.status.overlay_every = 1;
