@@ -177,6 +177,32 @@ TEST(Simulator, VisibilityMatchesBruteForceRayCast) {
   }
 }
 
+// A pipe reaching out of the view counts its whole silhouette (the BOP toolkit's calc_gt_info
+// draws it on a canvas three times the image's size): the same pile seen through the middle third
+// of an image has the same px_count_all per pipe, and a pipe cut by the edge is seen less.
+TEST(Simulator, APipeReachingOutOfTheViewCountsItsWholeSilhouette) {
+  const PipeModel model = coarse_model("u");
+  SceneParams wide = small_params(7);
+  wide.intrinsics = {480, 360, 400, 400, 239.5, 179.5};
+  SceneParams narrow = wide;
+  narrow.intrinsics = {160, 120, 400, 400, 79.5, 59.5};
+  std::mt19937 a(11), b(11);
+  const SimulatedScene whole = simulate_scene(model, wide, a);
+  const SimulatedScene cut = simulate_scene(model, narrow, b);
+  ASSERT_EQ(whole.info.size(), cut.info.size());
+  int reaching_out = 0;
+  for (std::size_t i = 0; i < whole.info.size(); ++i) {
+    ASSERT_TRUE(whole.model_to_cam(int(i)).isApprox(cut.model_to_cam(int(i))));
+    EXPECT_NEAR(cut.info[i].px_count_all, whole.info[i].px_count_all, 2) << "pipe " << i;
+    EXPECT_LE(cut.info[i].px_count_visib, whole.info[i].px_count_visib) << "pipe " << i;
+    if (cut.info[i].px_count_visib + 20 < whole.info[i].px_count_visib) {
+      ++reaching_out;
+      EXPECT_LT(cut.info[i].visib_fract, whole.info[i].visib_fract) << "pipe " << i;
+    }
+  }
+  EXPECT_GE(reaching_out, 1);
+}
+
 // No pipe passes into another: no surface sample of one lies inside another by more than a
 // height-map cell.
 TEST(Simulator, PipesDoNotInterpenetrateAndLieAtVariedTilts) {

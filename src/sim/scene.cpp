@@ -60,22 +60,29 @@ void render_views(const PipeModel& model, const std::vector<Pose>& model_to_worl
 std::vector<GtInfo> visibility_info(const PipeModel& model, const SimulatedScene& scene) {
   const int n = int(scene.model_to_world.size());
   std::vector<GtInfo> info(n);
-  // Each pipe alone, drawn only into the box it covers.
-  Image<float> alone(scene.camera.intrinsics.width, scene.camera.intrinsics.height, 0.0f);
+  // Each pipe alone, drawn only into the box it covers, on a canvas three times the image's size
+  // with the image in its middle (as the BOP toolkit's calc_gt_info does): a pipe reaching out of
+  // the view counts its whole silhouette, and the part outside is not seen.
+  const Intrinsics& k = scene.camera.intrinsics;
+  Intrinsics wide = k;
+  wide.width = 3 * k.width, wide.height = 3 * k.height;
+  wide.cx = k.cx + k.width, wide.cy = k.cy + k.height;
+  Image<float> alone(wide.width, wide.height, 0.0f);
   ProjectedMesh projected;
   projected.reserve(model.mesh);
   for (int i = 0; i < n; ++i) {
-    const PixelBox box = render_depth_in_box(model.mesh, scene.model_to_cam(i), scene.camera.intrinsics, &alone,
-                                             &projected);
+    const PixelBox box = render_depth_in_box(model.mesh, scene.model_to_cam(i), wide, &alone, &projected);
     int all = 0, visib = 0, valid = 0, by_pipes = 0;
     for (int y = box.y0; y <= box.y1; ++y)
       for (int x = box.x0; x <= box.x1; ++x) {
         if (alone.at(x, y) <= 0) continue;
         ++all;
-        const int front = scene.clean.label.at(x, y);
+        const int u = x - k.width, v = y - k.height;  // in the image
+        if (u < 0 || v < 0 || u >= k.width || v >= k.height) continue;
+        const int front = scene.clean.label.at(u, v);
         if (front == i) {
           ++visib;
-          if (scene.depth_mm.at(x, y) > 0) ++valid;
+          if (scene.depth_mm.at(u, v) > 0) ++valid;
         } else if (front >= 0 && front < n) {
           ++by_pipes;
         }
