@@ -28,6 +28,13 @@ Verification below_floor(Verification v, float share) {
   return v;
 }
 
+// A pipe that slides along itself, its ends judged: `pinned` shown ending, `continued` going on.
+Evidence sliding(Evidence e, int pinned, int continued) {
+  e.ends_must_pin = true;
+  e.best.ends_pinned = pinned, e.best.ends_continued = continued;
+  return e;
+}
+
 Evidence after_ridge(int ridge_points, float extent_l_mm = kL) {
   Evidence e;
   e.tube_d_mm = kD;
@@ -114,6 +121,13 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
        CandidateOutcome::accepted, true, false, 0.35f},
       {"rival clearly worse", judged_with_rival(seen(900, 0, 0), seen(840, 0, 0)), true,
        CandidateOutcome::accepted, false, true, 0.9f},
+      // A pipe that slides along itself (an arc, a coil, a straight run) is placed by its ends.
+      {"sliding, an end pinned", sliding(judged(seen(900, 0, 0)), 1, 0), true, CandidateOutcome::accepted,
+       false, true, 0.9f},
+      {"sliding, no end seen", sliding(judged(seen(900, 0, 0)), 0, 0), true, CandidateOutcome::accepted, true,
+       false, 0.45f},
+      {"sliding, the tube goes on beyond an end", sliding(judged(seen(900, 0, 0)), 1, 1), true,
+       CandidateOutcome::accepted, true, false, 0.45f},
       {"rival seen through: worse", judged_with_rival(seen(900, 0, 0), seen(900, 30, 0)), true,
        CandidateOutcome::accepted, false, true, 0.9f},
   };

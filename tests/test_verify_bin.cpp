@@ -132,6 +132,48 @@ TEST(BinAwareVerification, FreeSpaceIsJudgedInsideTheRimBand) {
   EXPECT_EQ(off_rejected, off_rejected_rim_only);
 }
 
+// An arc slides along itself: away from its ends the slid pose shows the same surface. Lying
+// alone on the floor, at its true pose both ends are pinned (the floor lies lower beyond them);
+// slid along itself, the tube goes on beyond the end that withdrew; with no reading around its
+// ends (out of view, a dropout) nothing pins it, and decide() marks such a pose ambiguous.
+TEST(BinAwareVerification, AnArcIsPlacedAlongItselfOnlyByAnEndTheImageShows) {
+  const LocateConfig cfg;
+  const PipeModel model = pipe_of("B200r80", 16, "arc");
+  const LocatorModel lm = prepare_locator_model(model, 8, cfg);
+  ASSERT_FALSE(lm.slides.empty());
+  std::mt19937 rng(3);
+  SceneParams p;
+  p.pile.pipes = 1;
+  p.camera_height_min_mm = p.camera_height_max_mm = 800;
+  SimulatedScene s = simulate_scene(model, p, rng);
+  const float d = model.tube_diameter_mm, tol = float(cfg.verify_tolerance_mm);
+  const auto ends = [&](const Pose& m2c, const Image<float>& depth) {
+    Verification v;
+    judge_ends(lm.centreline_points, d, m2c, depth, s.camera.intrinsics, tol, &v);
+    return v;
+  };
+  const Verification truth = ends(s.model_to_cam(0), s.depth_mm);
+  EXPECT_EQ(truth.ends_pinned, 2);
+  EXPECT_EQ(truth.ends_continued, 0);
+  for (const Pose& slide : lm.slides) {
+    const Verification slid = ends(s.model_to_cam(0) * slide, s.depth_mm);
+    EXPECT_GE(slid.ends_continued, 1);
+  }
+  // No reading within 2 D of either end of the tube.
+  Image<float> hidden = s.depth_mm;
+  for (const Eigen::Vector3f& end : {lm.centreline_points.front(), lm.centreline_points.back()}) {
+    const Eigen::Vector3d c = s.model_to_cam(0) * end.cast<double>();
+    const Eigen::Vector2d px = s.camera.intrinsics.project(c);
+    const double r_px = 2 * d * s.camera.intrinsics.fx / c.z();
+    for (int y = 0; y < hidden.height; ++y)
+      for (int x = 0; x < hidden.width; ++x)
+        if ((Eigen::Vector2d(x, y) - px).norm() < r_px) hidden.at(x, y) = 0;
+  }
+  const Verification unseen = ends(s.model_to_cam(0), hidden);
+  EXPECT_EQ(unseen.ends_pinned, 0);
+  EXPECT_EQ(unseen.ends_continued, 0);
+}
+
 // On a simulated bin (floor at z = 0) the floor is found, a pipe's pose lies on it, and the same
 // pose four diameters lower lies under it.
 TEST(BinAwareVerification, NoPoseBelowTheFloor) {

@@ -32,7 +32,9 @@ Json verification_json(const Verification& v) {
           {"free_space", v.free_space()},
           {"inner_free_space", v.inner_free_space()},
           {"occluded", v.occluded()},
-          {"side_level", v.side_level()}};
+          {"side_level", v.side_level()},
+          {"ends_pinned", v.ends_pinned},
+          {"ends_continued", v.ends_continued}};
 }
 
 Json estimate_json(const PipeEstimate& e, int rank, bool pick) {

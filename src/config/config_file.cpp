@@ -234,6 +234,7 @@ void read_locate(Section& s, LocateConfig* c) {
   s.real("ambiguity_quality_margin", &c->ambiguity_quality_margin, 0, 1, "share");
   s.integer("verify_hypotheses", &c->verify_hypotheses, 1, 24, "fits per region");
   s.boolean("judge_slides", &c->judge_slides);
+  s.boolean("pin_slides_by_ends", &c->pin_slides_by_ends);
   s.integer("max_candidates", &c->max_candidates, 1, 256, "regions");
   s.integer("max_results", &c->max_results, 1, 256, "poses");
   s.integer("threads", &c->threads, 1, 64, "threads");

@@ -97,6 +97,9 @@ Decision decide(const Evidence& e, const LocateConfig& cfg) {
   out.outcome = CandidateOutcome::accepted;
   out.ambiguous = e.have_second && hypothesis_quality(e.second) >=
                                        hypothesis_quality(e.best) - float(cfg.ambiguity_quality_margin);
+  // Beyond the paper: a pipe that slides along itself is placed along its length only by an end
+  // the image shows; where none is seen, or the tube goes on beyond one, the pose may be slid.
+  if (e.ends_must_pin && (e.best.ends_pinned == 0 || e.best.ends_continued > 0)) out.ambiguous = true;
   out.score =
       e.best.agreement() * (1.0f - e.best.occluded()) * (out.ambiguous ? kAmbiguousScoreFactor : 1.0f);
   out.pickable = !out.ambiguous && e.best.occluded() <= float(cfg.verify_max_occluded);
@@ -263,6 +266,9 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
                           float(cfg.verify_tolerance_mm), float(cfg.side_drop_of_d) * lm.tube_d_mm,
                           free_space_band_px(cfg, lm, ctx.camera, e.model_to_cam),
                           &buf->scratch_depth, &buf->scratch_mesh);
+    if (cfg.pin_slides_by_ends && !lm.slides.empty())
+      judge_ends(lm.centreline_points, lm.tube_d_mm, e.model_to_cam, ctx.depth, ctx.camera,
+                 float(cfg.verify_tolerance_mm), &e.check);
     if (!std::isnan(ctx.lowest_surface_z_mm))
       e.check.below_floor = share_below(lm.verify_mesh, e.model_to_bin,
                                         ctx.lowest_surface_z_mm - kBelowFloorOfD * lm.tube_d_mm);
@@ -311,8 +317,8 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
     }
     // Beyond the paper: a pipe slid along itself (an arc about its centre, a coil along its helix)
     // shows the same surface wherever its ends are not seen: the slid poses are rivals too.
-    for (const Pose& slide : lm.slides) {
-      const Pose slid = found * slide;
+    for (std::size_t k = 0; cfg.judge_slides && k < lm.slides.size(); ++k) {
+      const Pose slid = found * lm.slides[k];
       if (have_second && pick_distance_mm(lm, slid, second.model_to_bin, ambiguity_mm) <= ambiguity_mm)
         continue;
       if (deadline.passed()) return out;
@@ -328,6 +334,7 @@ bool work_candidate(const CandidateContext& ctx, const CandidateInput& in, const
   Evidence evidence;
   evidence.tube_d_mm = ctx.lm.tube_d_mm;
   evidence.extent_l_mm = ctx.lm.extent_l_mm;
+  evidence.ends_must_pin = ctx.cfg.pin_slides_by_ends && !ctx.lm.slides.empty();
   // Between two stages: decided by the evidence so far, or out of time. A candidate cut short
   // leaves no estimate (its outcome stays "budget").
   const auto settled = [&] {

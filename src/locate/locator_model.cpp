@@ -190,7 +190,7 @@ LocatorModel prepare_locator_model(const PipeModel& model, float margin_mm, cons
     lm.canonical_starts.push_back(canonical_start(
         model, Eigen::AngleAxisd(2 * M_PI * k / turns, Eigen::Vector3d::UnitX()).toRotationMatrix() * lying,
         cfg));
-  if (cfg.judge_slides) {
+  {
     // Slides just beyond the ambiguity distance are the hardest to tell apart; longer ones are
     // judged too (a pose 5-45 mm along an arc was handed out as a pick before this check). The
     // tolerance and share are those of the near symmetries: a quarter of D, 60 % of the surface.

@@ -9,6 +9,8 @@ namespace {
 // The sides are read this many pixels beyond the silhouette: the pixel next to it mixes pipe and
 // background (lateral noise).
 constexpr int kSideStepPx = 2;
+// Where beyond a tube's end the image is read (shares of D along the centreline's direction).
+constexpr float kEndProbesOfD[] = {0.75f, 1.25f};
 
 }  // namespace
 
@@ -64,6 +66,43 @@ Verification verify_pose(const Mesh& mesh, Winding winding, const Pose& model_to
         ++v.agree_px;
     }
   return v;
+}
+
+void judge_ends(const std::vector<Eigen::Vector3f>& centreline, float d, const Pose& model_to_cam,
+                const Image<float>& depth, const Intrinsics& k, float tol, Verification* v) {
+  v->ends_pinned = v->ends_continued = 0;
+  const int n = int(centreline.size());
+  if (n < 2) return;
+  const Eigen::Matrix3f r = model_to_cam.linear().cast<float>();
+  const Eigen::Vector3f t = model_to_cam.translation().cast<float>();
+  for (int e = 0; e < 2; ++e) {
+    const int end = e == 0 ? 0 : n - 1, step = e == 0 ? 1 : -1;
+    // The way out of the tube at this end: from the centreline point about D inside it.
+    int in = end;
+    while (in + step >= 0 && in + step < n && (centreline[in] - centreline[end]).norm() < d) in += step;
+    const Eigen::Vector3f tip = r * centreline[end] + t;
+    Eigen::Vector3f out = r * (centreline[end] - centreline[in]);
+    if (!(out.norm() > 0.25f * d)) continue;
+    out.normalize();
+    int free = 0, going_on = 0, probes = 0;
+    for (const float beyond : kEndProbesOfD) {
+      // The continued tube's centre, and its surface facing the camera half a diameter nearer.
+      const Eigen::Vector3f centre = tip + beyond * d * out;
+      if (!(centre.z() > 0)) continue;
+      const Eigen::Vector3f facing = centre - 0.5f * d * centre.normalized();
+      const Eigen::Vector2d px = k.project(facing.cast<double>());
+      const int x = int(std::lround(px.x())), y = int(std::lround(px.y()));
+      if (!depth.inside(x, y)) continue;
+      const float zo = depth.at(x, y);
+      if (!(zo > 0) || zo < facing.z() - tol) continue;  // no reading, or something in front
+      ++probes;
+      free += zo > facing.z() + tol;
+      going_on += zo <= facing.z() + tol;
+    }
+    if (probes == 0) continue;
+    v->ends_pinned += free == probes;
+    v->ends_continued += going_on == probes;
+  }
 }
 
 float lowest_surface_z(const ZBuffer& zb, float share, std::vector<int>* histogram) {

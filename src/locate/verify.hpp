@@ -36,6 +36,10 @@ struct Verification {
   int side_level_px = 0;  // ... whose depth lies within the drop of the silhouette's
   float side_level() const { return side_px ? float(side_level_px) / float(side_px) : 0.f; }
   float below_floor = 0;  // share of the model more than kBelowFloorOfD * D under the lowest surface seen
+  // The tube's two ends (judge_ends): pinned where the image shows it ends there (the surface
+  // beyond lies lower), continued where the tube's surface goes on beyond it (a pose slid along
+  // the pipe); neither where nothing is seen there (out of view, no reading, something in front).
+  int ends_pinned = 0, ends_continued = 0;
 };
 
 // A pose is under the floor when more than this share of its model lies more than this * D below
@@ -53,6 +57,13 @@ Verification verify_pose(const Mesh& mesh, Winding winding, const Pose& model_to
                          float side_drop_mm, int free_band_px, Image<float>* scratch,
                          ProjectedMesh* projected);
 
+// Beyond the paper: are the tube's ends where the image shows them? Beyond each end of the
+// centreline (model frame, ordered from one end to the other; tube diameter d_mm), the surface a
+// continued tube would show the camera is compared with the depth measured there: farther than
+// tolerance_mm is an end the image pins, within it a tube going on. Fills ends_pinned and
+// ends_continued of *v.
+void judge_ends(const std::vector<Eigen::Vector3f>& centreline, float d_mm, const Pose& model_to_cam,
+                const Image<float>& depth_mm, const Intrinsics& k, float tolerance_mm, Verification* v);
 // Beyond the paper: the bin. The lowest surface the frame shows (the floor where it is seen, else
 // the lowest pipes), as the height under which `share` of the Z-buffer's valid cells lie;
 // histogram: working memory (1 mm bins). NaN when the buffer is empty.
