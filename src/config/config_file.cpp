@@ -202,6 +202,7 @@ void read_locate(Section& s, LocateConfig* c) {
   s.real("convexity_min_share", &c->convexity_min_share, 0, 1, "share");
   s.real("region_max_drop_of_d", &c->region_max_drop_of_d, 0.1, 5, "x D");
   s.real("region_max_reach_of_d", &c->region_max_reach_of_d, 0.1, 100, "x D");
+  s.real("region_join_gap_of_d", &c->region_join_gap_of_d, 0, 20, "x D (0: off)");
   s.real("hole_bridge_of_d", &c->hole_bridge_of_d, 0, 10, "x D (0: off)");
   s.real("region_max_claimed_share", &c->region_max_claimed_share, 0, 1, "share");
   s.real("section_width_min_of_d", &c->section_width_min_of_d, 0.1, 2, "x D");

@@ -46,6 +46,9 @@ struct LocateConfig {
   double region_min_extent_of_l = 0.7;  // a of the paper
   double region_max_drop_of_d = 0.8;    // grown cells lie at most this far below their core
   double region_max_reach_of_d = 1.0;   // ... and at most this far from it (steps of growth)
+  double region_join_gap_of_d = 3;  // a region too short is joined to the piece of top strip that
+                                    // continues it across a gap up to this * D (a pipe lying across,
+                                    // a dropout): same direction, same height (0: off)
   double hole_bridge_of_d = 0;  // growth crosses holes in the top strip up to this * D long (0: off;
                                 // 1 bridges dropouts but costs the dev set 0.012 recall@5)
   double region_max_claimed_share = 0.75;  // a region with more of its cells in earlier candidates'
@@ -75,6 +78,7 @@ struct LocateConfig {
   double icp_converged_mm = 0.05;
   double residual_max_of_d = 0.35;  // R_th = this * D (mean ridge distance; verification follows)
   double residual_noise_floor_mm = 0;  // R_th is at least this (set per frame by raise_to_noise, not a key)
+  double frame_sigma_mm = 0;           // the frame's measured depth noise (set per frame, not a key)
 
   // Beyond the paper: surface refinement, verification, ambiguity.
   int refine_iterations = 12;

@@ -4,10 +4,20 @@
 #include <cmath>
 #include <limits>
 
+#include <Eigen/Eigenvalues>
+
 namespace pipeloc {
 namespace {
 
 constexpr double kDeg = M_PI / 180.0;
+// Joining pieces of a top strip: at most this many joins per region, and the direction of each
+// piece's end within this angle of the gap (a bend turns the strip a little across it).
+constexpr int kMaxJoins = 4;
+constexpr double kJoinMaxTurnDeg = 35;
+constexpr float kJoinMaxSlope = 0.3f;  // height change per mm of gap (a pipe leaning on others)
+struct JoinEnd {
+  int core, end;
+};
 const int kDi[8] = {-1, 0, 1, -1, 1, -1, 0, 1};
 const int kDj[8] = {-1, -1, -1, 0, 0, 1, 1, 1};
 
@@ -221,6 +231,97 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
     return a.area != b.area ? a.area > b.area : rb->core_cells[a.begin] < rb->core_cells[b.begin];
   });
 
+  // Beyond the paper: joining pieces of a top strip. The two ends of a core (bin frame: its
+  // farthest cells) and the direction it runs out at each, computed when first asked for.
+  const float join_gap = float(cfg.region_join_gap_of_d) * d;
+  const float join_height_tol = std::max(0.25f * d, 3.0f * float(cfg.frame_sigma_mm));
+  const float join_cos = float(std::cos(kJoinMaxTurnDeg * kDeg));
+  struct Ends {
+    bool known = false;
+    Eigen::Vector3f p[2], dir[2];
+  };
+  Ends ends[kMaxCores];
+  const auto core_point = [&](int k) { return zb.point(column_of(rb->queue[k]), row_of(rb->queue[k])); };
+  const auto ends_of = [&](int c) -> const Ends& {
+    Ends& e = ends[c];
+    if (e.known) return e;
+    const int b = cores[c].begin, n = cores[c].end - cores[c].begin;
+    const auto farthest = [&](const Eigen::Vector3f& from) {
+      int far = b;
+      float best = -1;
+      for (int k = b; k < b + n; ++k)
+        if (const float d2 = (core_point(k) - from).squaredNorm(); d2 > best) best = d2, far = k;
+      return core_point(far);
+    };
+    e.p[0] = farthest(core_point(b));
+    e.p[1] = farthest(e.p[0]);
+    // Along the strip at each end: the principal direction (in plan) of its cells within 2 D of
+    // the end, turned to point out of the core.
+    const float r2 = (2.0f * d) * (2.0f * d);
+    for (int s = 0; s < 2; ++s) {
+      Eigen::Vector2f sum = Eigen::Vector2f::Zero();
+      Eigen::Matrix2f sum_sq = Eigen::Matrix2f::Zero();
+      int m = 0;
+      for (int k = b; k < b + n; ++k)
+        if (const Eigen::Vector3f q = core_point(k); (q - e.p[s]).squaredNorm() <= r2) {
+          const Eigen::Vector2f v = q.head<2>() - e.p[s].head<2>();  // about the end: no cancellation
+          sum += v, sum_sq += v * v.transpose(), ++m;
+        }
+      const Eigen::Vector2f mean = sum / float(std::max(1, m));
+      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2f> eig(sum_sq / float(std::max(1, m)) -
+                                                                mean * mean.transpose());
+      Eigen::Vector2f along = eig.eigenvectors().col(1);
+      if (along.dot(-mean) < 0) along = -along;  // the mean lies inside the core from the end
+      e.dir[s] = Eigen::Vector3f(along.x(), along.y(), 0);
+    }
+    e.known = true;
+    return e;
+  };
+  // Nothing on the straight gap between two ends lies lower than the line joining them (the pipe
+  // would be seen there): the cells are empty, the pipe's own top, or something lying across it.
+  const auto gap_covered = [&](const Eigen::Vector3f& a, const Eigen::Vector3f& b) {
+    const int steps = int((b - a).head<2>().norm() / float(zb.pixel_mm)) + 1;
+    for (int s = 1; s < steps; ++s) {
+      const Eigen::Vector3f q = a + (b - a) * (float(s) / float(steps));
+      const int i = int(round_nearest(float((q.x() - zb.origin_x_mm) / zb.pixel_mm)));
+      const int j = int(round_nearest(float((q.y() - zb.origin_y_mm) / zb.pixel_mm)));
+      if (zb.valid(i, j) && zb.z.at(i, j) < q.z() - join_height_tol) return false;
+    }
+    return true;
+  };
+  const auto mostly_marked = [&](const Image<int>& marks, int value, int c) {
+    int in = 0;
+    for (int k = cores[c].begin; k < cores[c].end; ++k) in += marks.pixels[std::size_t(rb->core_cells[k])] == value;
+    return 2 * in > cores[c].end - cores[c].begin;
+  };
+  // The core continuing one of the region's open ends across a gap, nearest first; that end is
+  // then replaced by the partner's far end. {-1, 0} when none.
+  const auto join_partner = [&](JoinEnd open_ends[2], int stamp, int claim) -> JoinEnd {
+    JoinEnd best{-1, 0};
+    int best_end = -1;
+    float best_gap = join_gap;
+    for (int e = 0; e < 2; ++e) {
+      const Ends& a = ends_of(open_ends[e].core);
+      const Eigen::Vector3f pa = a.p[open_ends[e].end], ua = a.dir[open_ends[e].end];
+      for (int k = 0; k < n_cores; ++k) {
+        const Ends& b = ends_of(k);
+        for (int f = 0; f < 2; ++f) {
+          const Eigen::Vector3f g = b.p[f] - pa;
+          const float gap = g.head<2>().norm();
+          if (gap >= best_gap || gap <= 0) continue;
+          const Eigen::Vector3f u(g.x() / gap, g.y() / gap, 0);
+          if (ua.dot(u) < join_cos || -b.dir[f].dot(u) < join_cos) continue;
+          if (std::abs(g.z()) > join_height_tol + kJoinMaxSlope * gap) continue;
+          if (mostly_marked(rb->stamp, stamp, k) || mostly_marked(rb->claim, claim, k)) continue;
+          if (!gap_covered(pa, b.p[f])) continue;
+          best = {k, f}, best_end = e, best_gap = gap;
+        }
+      }
+    }
+    if (best.core >= 0) open_ends[best_end] = {best.core, 1 - best.end};
+    return best;
+  };
+
   // 2. Grow each core while the normal of a neighbour is close to that of the boundary cell.
   int region_pool = 0;
   const int claim = ++rb->claim_value;
@@ -266,10 +367,9 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
     // The queue is breadth-first, in order of reach: the cells the first pass did not grow from
     // are its last ones. Growing on from the first of them is the unlimited growth from scratch.
     int held_back = -1;
-    bool found = false;
-    for (int pass = 0; pass < 2 && !found; ++pass) {
-      const int reach_limit = pass == 0 ? reach_max : std::numeric_limits<int>::max() - 1;
-      for (int head = pass == 0 ? 0 : held_back; head < count; ++head) {
+    // Grows breadth-first from queue position `from` on; cells beyond reach_limit are held back.
+    const auto grow = [&](int from, int reach_limit) {
+      for (int head = from; head < count; ++head) {
         const int ci = column_of(rb->grow_queue[head]), cj = row_of(rb->grow_queue[head]);
         const int at = cells[head];
         const Eigen::Vector3f ni_n = nm.n.pixels[std::size_t(at)];
@@ -327,13 +427,41 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
           if (head < core_count)
             ++ring_cells, ring_lower += nn.x() * float(kDi[k]) + nn.y() * float(kDj[k]) > 0;
         }
-        if (leaked || (head + 1 == core_count && !convex())) break;
+        if (leaked || (head + 1 == core_count && !convex())) return;
       }
-      if (leaked) break;  // spread over far more than one pipe: not a pipe lying on others
-      if (!convex()) break;
-      // 3. Keep regions longer than a * L.
-      found = box.longer_than(float(cfg.region_min_extent_of_l) * l, zb, cells, count);
-      if (held_back < 0) break;  // the limit held nothing back: growing on adds nothing
+    };
+    const float min_extent = float(cfg.region_min_extent_of_l) * l;
+    grow(0, reach_max);
+    bool found = !leaked && convex() && box.longer_than(min_extent, zb, cells, count);
+    // Beyond the paper: a top strip cut by a pipe lying across it, or by a dropout, falls into
+    // pieces each too short. The piece continuing this one across the gap (same direction, same
+    // height, nothing lower between) is grown with it: one pipe.
+    if (!found && !leaked && convex() && join_gap > 0) {
+      JoinEnd open_ends[2] = {{c, 0}, {c, 1}};  // the joined strip's two ends
+      for (int joins = 0; joins < kMaxJoins && !found; ++joins) {
+        const JoinEnd next = join_partner(open_ends, stamp, claim);
+        if (next.core < 0) break;
+        const int from = count;
+        for (int k = cores[next.core].begin; k < cores[next.core].end && count < rb->max_region_cells; ++k) {
+          const int q = rb->core_cells[k];
+          if (rb->stamp.pixels[q] == stamp) continue;
+          rb->stamp.pixels[q] = stamp;
+          rb->grow_queue[count] = rb->queue[k];
+          cells[count++] = q;
+          rb->ridge_z.pixels[q] = zb.z.pixels[q];
+          rb->reach.pixels[q] = 0;
+        }
+        grow(from, reach_max);
+        if (leaked) break;
+        found = box.longer_than(min_extent, zb, cells, count);
+        if (found) ++stats.joined;
+      }
+    }
+    // Growth held to reach_max that held nothing back is all growth there is; otherwise a region
+    // still too short is grown on without the limit (the paper's growth) from where it stopped.
+    if (!found && !leaked && convex() && held_back >= 0) {
+      grow(held_back, std::numeric_limits<int>::max() - 1);
+      found = !leaked && box.longer_than(min_extent, zb, cells, count);
     }
     if (!found) {
       ++(leaked ? stats.leaked : !convex() ? stats.not_convex : stats.short_regions);

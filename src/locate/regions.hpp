@@ -44,6 +44,7 @@ struct RegionStats {
   int leaked = 0;        // grown over far more than one pipe
   int not_convex = 0;    // the cells beside the core do not tilt away from it (floor between pipes)
   int short_regions = 0; // shorter than a * L
+  int joined = 0;        // long enough once joined to pieces continuing them across gaps
 };
 
 void reserve_regions(RegionBuffers* rb, const ZBuffer& zb, const LocateConfig& cfg, float tube_d_mm,

@@ -117,6 +117,7 @@ void set_frame_thresholds(const LocateConfig& user, float d, const DepthNoise& n
   if (user.refine_inlier_mm <= 0)
     cfg->refine_inlier_mm = std::max(kRefineInlierOfSigma * sigma, kRefineInlierOfD * double(d));
   cfg->residual_noise_floor_mm = user.raise_to_noise ? kResidualOfSigma * sigma : 0.0;
+  cfg->frame_sigma_mm = sigma;
   if (user.normal_window_mm <= 0) {
     const double footprint_mm = double(noise.depth_mm) / std::max(1.0, camera.fx);
     cfg->normal_window_mm = std::max(kNormalWindowOfD * d, kNormalWindowMinFootprints * footprint_mm);
