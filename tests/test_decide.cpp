@@ -93,7 +93,7 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
        0},
       {"free space over 0.05", judged(seen(900, 51, 0)), true, CandidateOutcome::not_confirmed, false, false,
        0},
-      {"sides level: a smooth blob", judged(with_sides(seen(900, 0, 0), 100, 61)), true,
+      {"sides level: a smooth blob", judged(with_sides(seen(900, 0, 0), 100, 31)), true,
        CandidateOutcome::not_confirmed, false, false, 0},
       {"a third under the floor", judged(below_floor(seen(900, 0, 0), 0.31f)), true,
        CandidateOutcome::not_confirmed, false, false, 0},
@@ -107,7 +107,7 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
       // Accepted: score = agreement * (1 - occluded), halved when ambiguous.
       {"accepted and pickable", judged(seen(900, 10, 100)), true, CandidateOutcome::accepted, false, true,
        0.81f},
-      {"sides drop away", judged(with_sides(seen(900, 0, 0), 100, 59)), true,
+      {"sides drop away", judged(with_sides(seen(900, 0, 0), 100, 29)), true,
        CandidateOutcome::accepted, false, true, 0.9f},
       {"too few side pixels to judge", judged(with_sides(seen(900, 0, 0), kMinSidePx - 1, kMinSidePx - 1)),
        true, CandidateOutcome::accepted, false, true, 0.9f},

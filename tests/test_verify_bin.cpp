@@ -59,7 +59,7 @@ Scene straight_tube_scene(double axis_z_mm, double surround_z_mm, double tube_mm
 PipeModel straight_tube(double tube_mm = kTubeMm) { return pipe_of("S150", tube_mm, "straight"); }
 
 // The model drawn at the true pose: its sides drop away on the floor, and stay level on a blob
-// whose flanks go on from its silhouette (decide() rejects a pose over 0.6 level: test_decide).
+// whose flanks go on from its silhouette (decide() rejects a pose over 0.3 level: test_decide).
 TEST(BinAwareVerification, APipesSidesDropAwayASmoothBlobsDoNot) {
   const LocatorModel lm = prepare_locator_model(straight_tube(), 8, LocateConfig{});
   const auto verify_at = [&](const Scene& s, double axis_z_mm) {

@@ -33,6 +33,7 @@ Json verification_json(const Verification& v) {
           {"inner_free_space", v.inner_free_space()},
           {"occluded", v.occluded()},
           {"side_level", v.side_level()},
+          {"side_px", v.side_px},
           {"ends_pinned", v.ends_pinned},
           {"ends_continued", v.ends_continued}};
 }

@@ -93,7 +93,7 @@ struct LocateConfig {
                                            // (in pixels at the pose's distance; 0: the rim only)
   double verify_max_occluded = 0.15;       // share of model pixels covered by something in front
   double side_drop_of_d = 0.25;            // a pipe's surroundings lie at least this * D beyond its silhouette ...
-  double verify_max_side_level = 0.6;      // ... but for at most this share (more: a smooth blob, not a pipe)
+  double verify_max_side_level = 0.3;      // ... but for at most this share (more: a smooth blob, not a pipe)
   int verify_hypotheses = 3;               // distinct ridge fits refined and checked per region
   double ambiguity_pose_mm = 10;           // two fits further apart than this (MSSD) ...
   double ambiguity_quality_margin = 0.05;  // ... both confirmed within this margin: ambiguous
