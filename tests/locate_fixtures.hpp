@@ -30,6 +30,20 @@ inline PipeModel pipe_of(const std::string& path, double d, const std::string& n
   return derive_pipe_model(make_pipe(spec), name.empty() ? path : name);
 }
 
+// A 90-degree elbow fitting as a real pipe's STL models it: the outside and, facing in, its bore.
+inline Mesh hollow_elbow(double outer_mm, double wall_mm) {
+  PipeSpec spec;
+  spec.segments = parse_centreline("S20,B90r45,S20");
+  spec.diameter_mm = outer_mm;
+  Mesh mesh = make_pipe(spec);
+  spec.diameter_mm = outer_mm - 2 * wall_mm;
+  const Mesh bore = make_pipe(spec);
+  const int base = int(mesh.vertices.size());
+  mesh.vertices.insert(mesh.vertices.end(), bore.vertices.begin(), bore.vertices.end());
+  for (const auto& t : bore.faces) mesh.faces.push_back({base + t[0], base + t[2], base + t[1]});  // facing in
+  return mesh;
+}
+
 inline double pose_error(const PipeModel& m, const Pose& a, const Pose& b) {
   std::vector<Eigen::Vector3d> v;
   for (const auto& p : m.mesh.vertices) v.push_back(p.cast<double>());

@@ -4,6 +4,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <random>
 
 #include "locate/locator.hpp"
@@ -191,6 +192,35 @@ TEST(Locator, APipeCutByAHoleAcrossItsRidgeIsFound) {
                          << (out.traces.empty() ? "-" : outcome_name(out.traces[0].outcome)) << ", cut " << cut
                          << " px, band " << band_px << " px";
   }
+}
+
+// A customer's STL of a real elbow fitting models its bore. Lying alone in the bin, seen from
+// 0.45 m as the real RealSense frames of ../shared/field show one (the simulator draws the whole
+// hollow mesh), it is picked, never wrongly. Measured: 0.9, 5.0 and 8.2 mm from the truth (the
+// same elbow modelled solid: under 5, under 5 and 6.2 mm; a short elbow's accuracy at 0.45 m is
+// an open point of its own).
+TEST(Locator, ALoneHollowElbowIsPicked) {
+  const Mesh mesh = hollow_elbow(41.2, 3.5);
+  const PipeModel model = derive_pipe_model(mesh, "hollow elbow");
+  PipeModel drawn = model;  // the simulator draws the STL as it is, bore and all
+  drawn.mesh = mesh;
+  int within_5mm = 0;
+  for (unsigned seed = 1; seed <= 3; ++seed) {
+    std::mt19937 rng(seed);
+    SceneParams p;
+    p.pile.pipes = 1;
+    p.camera_height_min_mm = p.camera_height_max_mm = 450;
+    p.sensor = sensor_model("stereo");
+    const SimulatedScene s = simulate_scene(drawn, p, rng);
+    Locator loc(model, LocateConfig{}, s.camera.intrinsics);
+    const LocateOutput& out = loc.locate(s.depth_mm, s.camera);
+    ASSERT_GE(out.pick(), 0) << "seed " << seed;
+    const double err = pose_error(model, out.estimates[std::size_t(out.pick())].model_to_cam, s.model_to_cam(0));
+    std::printf("hollow elbow, seed %u: pick %.1f mm from the truth\n", seed, err);
+    EXPECT_LT(err, 10.0) << "seed " << seed << ": a wrong pick";
+    within_5mm += err < 5.0;
+  }
+  EXPECT_GE(within_5mm, 1);
 }
 
 TEST(Locator, EmptyAndInvalidFramesGiveNothingAndDoNotCrash) {

@@ -7,6 +7,7 @@
 #include "model/make_pipe.hpp"
 #include "model/neighbors.hpp"
 #include "model/pipe_model.hpp"
+#include "locate_fixtures.hpp"
 
 namespace pipeloc {
 namespace {
@@ -40,6 +41,27 @@ TEST(PipeModel, PresetsMeasureTheirDiameterWhateverTheWinding) {
     }
     EXPECT_GT(opposite_wall, checked * 9 / 10) << name;
   }
+}
+
+// A real pipe's STL often models its bore (a PVC elbow fitting: 41.2 mm outside, a 3.5 mm
+// wall). Measured across the wall, its "diameter" was the wall's thickness; the bore, which the
+// camera does not see, is now left out and the tube measures its outside. A solid pipe keeps
+// every face.
+TEST(PipeModel, AHollowPipeMeasuresItsOutsideAndLeavesItsBoreOut) {
+  const Mesh mesh = hollow_elbow(41.2, 3.5);
+  const PipeModel hollow = derive_pipe_model(mesh, "hollow elbow");
+  EXPECT_NEAR(hollow.tube_diameter_mm, 41.2, 0.3);
+  EXPECT_GT(hollow.bore_faces_removed, 0);
+  EXPECT_LT(hollow.mesh.faces.size(), mesh.faces.size());
+  PipeSpec spec;
+  spec.segments = parse_centreline("S20,B90r45,S20");
+  spec.diameter_mm = 41.2;
+  const PipeModel solid = derive_pipe_model(make_pipe(spec), "solid elbow");
+  EXPECT_EQ(solid.bore_faces_removed, 0);
+  EXPECT_NEAR(solid.tube_diameter_mm, hollow.tube_diameter_mm, 0.3);
+  EXPECT_EQ(hollow.symmetries.size(), solid.symmetries.size());
+  for (const char* preset : {"sbend", "u", "torus"})
+    EXPECT_EQ(derive_pipe_model(make_pipe(pipe_preset(preset)), preset).bore_faces_removed, 0) << preset;
 }
 
 TEST(Mesh, ClosedWindingTellsOutwardInwardAndOpen) {

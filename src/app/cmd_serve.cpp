@@ -98,10 +98,13 @@ int serve(const Options& opt) {
   const PipeModel model = load_config_model(cfg);
   spdlog::info(
       "model: {}: tube diameter {:.2f} mm, longest extent L {:.1f} mm, {} symmetries, {} near symmetries "
-      "(half-turns checked "
-      "as ambiguities)",
+      "(half-turns checked as ambiguities){}",
       model.source, model.tube_diameter_mm, model.extent_mm, model.symmetries.size(),
-      model.near_symmetries.size());
+      model.near_symmetries.size(),
+      model.bore_faces_removed > 0
+          ? fmt::format("; hollow: {} faces of its bore left out (the camera sees the outside)",
+                        model.bore_faces_removed)
+          : std::string());
   std::unique_ptr<FrameSource> source = open_frame_source(cfg, model);
   spdlog::info("source: {}", source->describe());
   Service service(cfg, model, std::move(source));

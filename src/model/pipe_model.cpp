@@ -3,7 +3,10 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <numeric>
 #include <random>
+#include <unordered_map>
 
 #include "model/neighbors.hpp"
 #include "model/stl.hpp"
@@ -28,7 +31,86 @@ float ray_triangle(const Eigen::Vector3f& o, const Eigen::Vector3f& d, const Eig
   return e2.dot(q) * inv;
 }
 
+// Hollow tubes: faces whose normals turn by less than this across a shared edge belong to one
+// smooth surface (a tube of 6 sides turns by 60 degrees; a pipe end's rim by 90).
+constexpr float kSmoothTurnDeg = 70;
+// A smooth surface from whose faces no ray along the normal leaves the mesh (of this many tried,
+// spread over it) and at least this share of the whole area is a bore the camera cannot see.
+constexpr int kBoreProbes = 16;
+constexpr float kBoreMinAreaShare = 0.1f;
+
+// Whether a ray from the face's centre along its normal leaves the mesh without meeting a face.
+bool escapes(const Mesh& mesh, std::size_t f) {
+  const auto& t = mesh.faces[f];
+  const Eigen::Vector3f c = (mesh.vertices[t[0]] + mesh.vertices[t[1]] + mesh.vertices[t[2]]) / 3.0f;
+  const Eigen::Vector3f n = mesh.face_normal(f);
+  const Eigen::Vector3f o = c + 1e-3f * n;
+  for (std::size_t g = 0; g < mesh.faces.size(); ++g) {
+    if (g == f) continue;
+    const auto& u = mesh.faces[g];
+    if (ray_triangle(o, n, mesh.vertices[u[0]], mesh.vertices[u[1]], mesh.vertices[u[2]]) > 0) return false;
+  }
+  return true;
+}
+
+int find_root(std::vector<int>* parent, int a) {
+  while ((*parent)[a] != a) a = (*parent)[a] = (*parent)[(*parent)[a]];
+  return a;
+}
+
 }  // namespace
+
+Mesh without_bore(const Mesh& mesh, int* removed_faces) {
+  *removed_faces = 0;
+  const std::size_t nf = mesh.faces.size();
+  // Smooth surfaces: faces joined across shared edges where their normals turn little.
+  std::vector<int> parent(nf);
+  std::iota(parent.begin(), parent.end(), 0);
+  std::unordered_map<std::uint64_t, int> first_face;  // edge (lower, higher vertex) -> a face on it
+  first_face.reserve(nf * 2);
+  const float smooth = std::cos(kSmoothTurnDeg * float(M_PI) / 180.0f);
+  for (std::size_t f = 0; f < nf; ++f)
+    for (int k = 0; k < 3; ++k) {
+      const int a = mesh.faces[f][k], b = mesh.faces[f][(k + 1) % 3];
+      const std::uint64_t key = (std::uint64_t(std::uint32_t(std::min(a, b))) << 32) | std::uint32_t(std::max(a, b));
+      const auto [it, fresh] = first_face.emplace(key, int(f));
+      if (fresh) continue;
+      if (mesh.face_normal(f).dot(mesh.face_normal(std::size_t(it->second))) > smooth)
+        parent[std::size_t(find_root(&parent, int(f)))] = find_root(&parent, it->second);
+    }
+  std::unordered_map<int, std::vector<int>> surfaces;
+  for (std::size_t f = 0; f < nf; ++f) surfaces[find_root(&parent, int(f))].push_back(int(f));
+  const float total = mesh.surface_area();
+  std::vector<char> bore(nf, 0);
+  for (const auto& [root, faces] : surfaces) {
+    float area = 0;
+    for (int f : faces) area += mesh.face_area(std::size_t(f));
+    if (area < kBoreMinAreaShare * total || int(faces.size()) < kBoreProbes) continue;
+    bool seen_from_outside = false;
+    for (int p = 0; p < kBoreProbes && !seen_from_outside; ++p)
+      seen_from_outside = escapes(mesh, std::size_t(faces[std::size_t(p) * faces.size() / kBoreProbes]));
+    if (seen_from_outside) continue;
+    for (int f : faces) bore[std::size_t(f)] = 1;
+    *removed_faces += int(faces.size());
+  }
+  if (*removed_faces == 0 || *removed_faces == int(nf)) {
+    *removed_faces = 0;
+    return mesh;
+  }
+  Mesh out;
+  std::vector<int> index(mesh.vertices.size(), -1);
+  for (std::size_t f = 0; f < nf; ++f) {
+    if (bore[f]) continue;
+    std::array<int, 3> t{};
+    for (int k = 0; k < 3; ++k) {
+      int& v = index[std::size_t(mesh.faces[f][k])];
+      if (v < 0) v = int(out.vertices.size()), out.vertices.push_back(mesh.vertices[std::size_t(mesh.faces[f][k])]);
+      t[k] = v;
+    }
+    out.faces.push_back(t);
+  }
+  return out;
+}
 
 std::vector<Eigen::Vector3f> compute_vertex_normals(const Mesh& mesh) {
   std::vector<Eigen::Vector3f> normals(mesh.vertices.size(), Eigen::Vector3f::Zero());
@@ -333,6 +415,8 @@ PipeModel derive_pipe_model(Mesh mesh, const std::string& source, const ModelDer
   model.mesh = std::move(mesh);
   if (model.mesh.faces.empty()) throw ModelError("model '" + source + "': mesh has no triangles");
   orient_outward(&model.mesh);
+  // Beyond the paper: a real pipe's STL often models its bore; the camera sees the outer surface.
+  model.mesh = without_bore(model.mesh, &model.bore_faces_removed);
   model.vertex_normals = compute_vertex_normals(model.mesh);
   const float area = model.mesh.surface_area();
   if (!(area > 0) || !std::isfinite(area)) throw ModelError("model '" + source + "': surface area is zero");

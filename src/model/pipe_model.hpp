@@ -21,6 +21,7 @@ struct PipeModel {
   std::vector<Eigen::Vector3f> vertex_normals;
   SurfaceSamples surface;      // about one sample per mm^2
   float tube_diameter_mm = 0;  // R of the paper
+  int bore_faces_removed = 0;  // faces of the bore of a hollow STL, taken out (without_bore)
   float extent_mm = 0;         // L of the paper: longest distance between two vertices
   Eigen::Vector3f centroid = Eigen::Vector3f::Zero();  // of the surface
   std::vector<Pose> symmetries;  // proper rotations other than identity mapping the surface onto itself
@@ -55,6 +56,11 @@ void orient_outward(Mesh* mesh);
 
 // Median distance from a vertex straight through the tube to the opposite wall.
 float measure_tube_diameter(const Mesh& mesh, const std::vector<Eigen::Vector3f>& vertex_normals);
+
+// The mesh without the bore of a hollow pipe: a smooth surface (normals turning by less than 70
+// degrees across its edges) of at least a tenth of the area from which no ray along the normal
+// leaves the mesh. A solid pipe comes back unchanged. removed_faces: how many were taken out.
+Mesh without_bore(const Mesh& mesh, int* removed_faces);
 float longest_extent(const std::vector<Eigen::Vector3f>& vertices);
 // Principal axes of a point set about `centroid`: the columns, by increasing spread.
 Eigen::Matrix3d principal_axes(const std::vector<Eigen::Vector3f>& points, const Eigen::Vector3f& centroid);
