@@ -84,6 +84,31 @@ TEST(BinAwareVerification, APipesSidesDropAwayASmoothBlobsDoNot) {
   EXPECT_GT(blob.side_level(), LocateConfig{}.verify_max_side_level);
 }
 
+// A refined pose lies up to a band's width (D/8) to the side of its pipe. The sides are read
+// beyond that band: a 40 mm tube 0.9 m away is 25 pixels wide, its band 3 pixels; moved D/8
+// across, the sides two pixels beyond its rim would fall on the pipe itself on one side.
+TEST(BinAwareVerification, ASidelongPoseReadsItsSidesBeyondItsOwnPipe) {
+  const double tube_mm = 40;
+  const LocateConfig cfg;
+  const LocatorModel lm = prepare_locator_model(straight_tube(tube_mm), 8, cfg);
+  const Scene s = straight_tube_scene(tube_mm / 2, 0, tube_mm);
+  Pose m2w = Pose::Identity();
+  m2w.translation() = Eigen::Vector3d(-75, tube_mm / 8, tube_mm / 2);  // D/8 across
+  const Pose m2c = *s.camera.world_to_cam * m2w;
+  Image<float> scratch(s.camera.intrinsics.width, s.camera.intrinsics.height, 0.0f);
+  ProjectedMesh projected;
+  projected.reserve(lm.verify_mesh);
+  const int band = free_space_band_px(cfg, lm, s.camera.intrinsics, m2c);
+  EXPECT_EQ(band, 3);
+  const auto side_level = [&](int b) {
+    return verify_pose(lm.verify_mesh, lm.verify_winding, m2c, s.depth, s.camera.intrinsics, 7.0f,
+                       float(cfg.side_drop_of_d * tube_mm), b, &scratch, &projected)
+        .side_level();
+  };
+  EXPECT_LT(side_level(band), 0.1);
+  EXPECT_GT(side_level(0), 0.3);  // read two pixels beyond the rim: half one side is the pipe
+}
+
 // Thin tubes (10 mm, 6 pixels wide at 0.8 m) on a pile seen by the active-stereo sensor, which
 // blends fore- and background at depth edges: at their true poses the pixels next to the rim
 // see through the model. Judged inside the band, the true poses pass the free-space check;

@@ -22,9 +22,11 @@ Verification verify_pose(const Mesh& mesh, Winding winding, const Pose& model_to
   const auto model_at = [&](int x, int y) {
     return x >= box.x0 && x <= box.x1 && y >= box.y0 && y <= box.y1 && scratch->at(x, y) > 0;
   };
-  // A side pixel: beyond the rim at (x, y) in direction (dx, dy), not on the model.
+  // A side pixel: beyond the rim at (x, y) in direction (dx, dy), not on the model; beyond the
+  // free-space band too, so that a pose a band's width to the side does not read its own pipe.
+  const int side_step = std::max(kSideStepPx, free_band_px + 1);
   const auto side = [&](int x, int y, int dx, int dy, float zm) {
-    const int xs = x + kSideStepPx * dx, ys = y + kSideStepPx * dy;
+    const int xs = x + side_step * dx, ys = y + side_step * dy;
     if (!depth.inside(xs, ys) || model_at(xs, ys)) return;
     const float zo = depth.at(xs, ys);
     if (!(zo > 0) || zo < zm - tol) return;  // no reading, or something in front: neither
