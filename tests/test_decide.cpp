@@ -23,6 +23,11 @@ Verification with_sides(Verification v, int side_px, int level) {
   return v;
 }
 
+Verification outside_view(Verification v, float share) {
+  v.outside_view = share;
+  return v;
+}
+
 Verification below_floor(Verification v, float share) {
   v.below_floor = share;
   return v;
@@ -115,6 +120,13 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
        false, true, 0.9f},
       {"accepted under another pipe", judged(seen(800, 0, 200)), true, CandidateOutcome::accepted, false,
        false, 0.64f},
+      // Out of the view the image checks nothing: as unseen as under another pipe.
+      {"a fifth out of the view", judged(outside_view(seen(900, 0, 0), 0.2f)), true,
+       CandidateOutcome::accepted, false, false, 0.9f},
+      {"a tenth under a pipe, a tenth out of the view", judged(outside_view(seen(900, 0, 100), 0.1f)), true,
+       CandidateOutcome::accepted, false, false, 0.81f},
+      {"a twentieth out of the view", judged(outside_view(seen(900, 0, 0), 0.05f)), true,
+       CandidateOutcome::accepted, false, true, 0.9f},
       {"rival about as good: ambiguous", judged_with_rival(seen(900, 0, 0), seen(860, 0, 0)), true,
        CandidateOutcome::accepted, true, false, 0.45f},
       {"rival failing by a hair: still ambiguous", judged_with_rival(seen(700, 0, 0), seen(690, 0, 0)), true,

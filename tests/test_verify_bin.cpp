@@ -84,6 +84,30 @@ TEST(BinAwareVerification, APipesSidesDropAwayASmoothBlobsDoNot) {
   EXPECT_GT(blob.side_level(), LocateConfig{}.verify_max_side_level);
 }
 
+// A pose reaching out of the view: the image checks nothing of the part outside it, which
+// verify_pose() gives as the share of the model's vertices outside the image (decide() counts it
+// as unseen, like the part under another pipe).
+TEST(BinAwareVerification, APoseReachingOutOfTheViewSaysHowMuch) {
+  const LocatorModel lm = prepare_locator_model(straight_tube(), 8, LocateConfig{});
+  const Scene s = straight_tube_scene(kTubeMm / 2, 0);
+  const Intrinsics& k = s.camera.intrinsics;
+  Image<float> scratch(k.width, k.height, 0.0f);
+  ProjectedMesh projected;
+  projected.reserve(lm.verify_mesh);
+  const auto outside_at = [&](double x_mm) {  // the tube from x_mm to x_mm + 150 along world X
+    Pose m2w = Pose::Identity();
+    m2w.translation() = Eigen::Vector3d(x_mm, 0, kTubeMm / 2);
+    return verify_pose(lm.verify_mesh, lm.verify_winding, *s.camera.world_to_cam * m2w, s.depth, k, 7.0f,
+                       0.25f * float(kTubeMm), 0, &scratch, &projected)
+        .outside_view;
+  };
+  // The image's right edge on the floor, 900 mm below the camera.
+  const double edge_mm = (k.width - 1 - k.cx) / k.fx * kCameraHeightMm;
+  EXPECT_EQ(outside_at(-75), 0.0f);
+  EXPECT_NEAR(outside_at(edge_mm - 75), 0.5, 0.1);
+  EXPECT_EQ(outside_at(edge_mm + 10), 1.0f);  // nearer than the floor, the tube projects farther out
+}
+
 // A refined pose lies up to a band's width (D/8) to the side of its pipe. The sides are read
 // beyond that band: a 40 mm tube 0.9 m away is 25 pixels wide, its band 3 pixels; moved D/8
 // across, the sides two pixels beyond its rim would fall on the pipe itself on one side.

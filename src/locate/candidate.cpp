@@ -102,7 +102,9 @@ Decision decide(const Evidence& e, const LocateConfig& cfg) {
   if (e.ends_must_pin && (e.best.ends_pinned == 0 || e.best.ends_continued > 0)) out.ambiguous = true;
   out.score =
       e.best.agreement() * (1.0f - e.best.occluded()) * (out.ambiguous ? kAmbiguousScoreFactor : 1.0f);
-  out.pickable = !out.ambiguous && e.best.occluded() <= float(cfg.verify_max_occluded);
+  // A pose is handed out only where the image could check it: under another pipe or out of the
+  // view, at most verify_max_occluded of it is unseen.
+  out.pickable = !out.ambiguous && e.best.occluded() + e.best.outside_view <= float(cfg.verify_max_occluded);
   return out;
 }
 

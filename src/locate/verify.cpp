@@ -19,6 +19,12 @@ Verification verify_pose(const Mesh& mesh, Winding winding, const Pose& model_to
                          int free_band_px, Image<float>* scratch, ProjectedMesh* projected) {
   Verification v;
   const PixelBox box = render_depth_in_box(mesh, model_to_cam, k, scratch, projected, winding);
+  int outside = 0;
+  for (std::size_t i = 0; i < mesh.vertices.size() && projected->cam.size() >= mesh.vertices.size(); ++i) {
+    const Eigen::Vector2d& px = projected->px[i];
+    outside += !(projected->cam[i].z() > 0 && px.x() >= 0 && px.y() >= 0 && px.x() < k.width && px.y() < k.height);
+  }
+  v.outside_view = mesh.vertices.empty() ? 0.f : float(outside) / float(mesh.vertices.size());
   const auto model_at = [&](int x, int y) {
     return x >= box.x0 && x <= box.x1 && y >= box.y0 && y <= box.y1 && scratch->at(x, y) > 0;
   };
