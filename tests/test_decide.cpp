@@ -40,6 +40,14 @@ Evidence sliding(Evidence e, int pinned, int continued) {
   return e;
 }
 
+// Ends read for the best and its rival (a model with a near twin): pinned and continued each.
+Evidence ends_read(Evidence e, int best_pinned, int best_continued, int second_pinned, int second_continued) {
+  e.ends_judged = true;
+  e.best.ends_pinned = best_pinned, e.best.ends_continued = best_continued;
+  e.second.ends_pinned = second_pinned, e.second.ends_continued = second_continued;
+  return e;
+}
+
 Evidence after_ridge(int ridge_points, float extent_l_mm = kL) {
   Evidence e;
   e.tube_d_mm = kD;
@@ -131,6 +139,12 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
        CandidateOutcome::accepted, true, false, 0.45f},
       {"rival failing by a hair: still ambiguous", judged_with_rival(seen(700, 0, 0), seen(690, 0, 0)), true,
        CandidateOutcome::accepted, true, false, 0.35f},
+      // A near twin as good where the image shows the best's ends, and the tube going on beyond
+      // one of the twin's: not ambiguous. Ends seen for neither: ambiguous.
+      {"twin as good, its end goes on", ends_read(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), 2, 0, 1, 1),
+       true, CandidateOutcome::accepted, false, true, 0.9f},
+      {"twin as good, no end seen", ends_read(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), 0, 0, 0, 0),
+       true, CandidateOutcome::accepted, true, false, 0.45f},
       {"rival clearly worse", judged_with_rival(seen(900, 0, 0), seen(840, 0, 0)), true,
        CandidateOutcome::accepted, false, true, 0.9f},
       // A pipe that slides along itself (an arc, a coil, a straight run) is placed by its ends.

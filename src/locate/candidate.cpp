@@ -95,8 +95,12 @@ Decision decide(const Evidence& e, const LocateConfig& cfg) {
   // thresholds itself: the best passing them by a hair and a rival failing them by one are the same.
   out.decided = true;
   out.outcome = CandidateOutcome::accepted;
-  out.ambiguous = e.have_second && hypothesis_quality(e.second) >=
-                                       hypothesis_quality(e.best) - float(cfg.ambiguity_quality_margin);
+  // ... unless the image shows the best's ends where they are and not the rival's (a near twin
+  // whose telling end is in view: beyond one of its ends the tube goes on, or it is not pinned).
+  const auto ends_shown = [](const Verification& v) { return v.ends_pinned - 2 * v.ends_continued; };
+  out.ambiguous = e.have_second &&
+                  hypothesis_quality(e.second) >= hypothesis_quality(e.best) - float(cfg.ambiguity_quality_margin) &&
+                  !(e.ends_judged && ends_shown(e.best) > ends_shown(e.second));
   // Beyond the paper: a pipe that slides along itself is placed along its length only by an end
   // the image shows; where none is seen, or the tube goes on beyond one, the pose may be slid.
   if (e.ends_must_pin && (e.best.ends_pinned == 0 || e.best.ends_continued > 0)) out.ambiguous = true;
@@ -268,7 +272,7 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
                           float(cfg.verify_tolerance_mm), float(cfg.side_drop_of_d) * lm.tube_d_mm,
                           free_space_band_px(cfg, lm, ctx.camera, e.model_to_cam),
                           &buf->scratch_depth, &buf->scratch_mesh);
-    if (cfg.pin_slides_by_ends && !lm.slides.empty())
+    if (cfg.pin_slides_by_ends && (!lm.slides.empty() || !ctx.model.near_symmetries.empty()))
       judge_ends(lm.centreline_points, lm.tube_d_mm, e.model_to_cam, ctx.depth, ctx.camera,
                  float(cfg.verify_tolerance_mm), &e.check);
     if (!std::isnan(ctx.lowest_surface_z_mm))
@@ -337,6 +341,7 @@ bool work_candidate(const CandidateContext& ctx, const CandidateInput& in, const
   evidence.tube_d_mm = ctx.lm.tube_d_mm;
   evidence.extent_l_mm = ctx.lm.extent_l_mm;
   evidence.ends_must_pin = ctx.cfg.pin_slides_by_ends && !ctx.lm.slides.empty();
+  evidence.ends_judged = ctx.cfg.pin_slides_by_ends && (!ctx.lm.slides.empty() || !ctx.model.near_symmetries.empty());
   // Between two stages: decided by the evidence so far, or out of time. A candidate cut short
   // leaves no estimate (its outcome stays "budget").
   const auto settled = [&] {
