@@ -237,6 +237,16 @@ RidgeFits fit_ridges(const CandidateContext& ctx, const CandidateInput& in, cons
   return out;
 }
 
+namespace {
+
+// Whether the poses' ends are read (judge_ends): for a pipe that slides along itself or has a
+// near twin, the ends are what place it.
+bool reads_ends(const CandidateContext& ctx) {
+  return ctx.cfg.pin_slides_by_ends && (!ctx.lm.slides.empty() || !ctx.model.near_symmetries.empty());
+}
+
+}  // namespace
+
 Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& in,
                             const ObservedRidge& observed, const Deadline& deadline, CandidateBuffers* buf) {
   const LocateConfig& cfg = ctx.cfg;
@@ -272,7 +282,7 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
                           float(cfg.verify_tolerance_mm), float(cfg.side_drop_of_d) * lm.tube_d_mm,
                           free_space_band_px(cfg, lm, ctx.camera, e.model_to_cam),
                           &buf->scratch_depth, &buf->scratch_mesh);
-    if (cfg.pin_slides_by_ends && (!lm.slides.empty() || !ctx.model.near_symmetries.empty()))
+    if (reads_ends(ctx))
       judge_ends(lm.centreline_points, lm.tube_d_mm, e.model_to_cam, ctx.depth, ctx.camera,
                  float(cfg.verify_tolerance_mm), &e.check);
     if (!std::isnan(ctx.lowest_surface_z_mm))
@@ -341,7 +351,7 @@ bool work_candidate(const CandidateContext& ctx, const CandidateInput& in, const
   evidence.tube_d_mm = ctx.lm.tube_d_mm;
   evidence.extent_l_mm = ctx.lm.extent_l_mm;
   evidence.ends_must_pin = ctx.cfg.pin_slides_by_ends && !ctx.lm.slides.empty();
-  evidence.ends_judged = ctx.cfg.pin_slides_by_ends && (!ctx.lm.slides.empty() || !ctx.model.near_symmetries.empty());
+  evidence.ends_judged = reads_ends(ctx);
   // Between two stages: decided by the evidence so far, or out of time. A candidate cut short
   // leaves no estimate (its outcome stays "budget").
   const auto settled = [&] {

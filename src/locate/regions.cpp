@@ -289,14 +289,20 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
     }
     return true;
   };
-  const auto mostly_marked = [&](const Image<int>& marks, int value, int c) {
+  const int claim = ++rb->claim_value;
+  // How many of the cells carry the mark; whether most of core c's do.
+  const auto marked = [&](const Image<int>& marks, int value, const int* cells, int n) {
     int in = 0;
-    for (int k = cores[c].begin; k < cores[c].end; ++k) in += marks.pixels[std::size_t(rb->core_cells[k])] == value;
-    return 2 * in > cores[c].end - cores[c].begin;
+    for (int k = 0; k < n; ++k) in += marks.pixels[std::size_t(cells[k])] == value;
+    return in;
+  };
+  const auto core_mostly_marked = [&](const Image<int>& marks, int value, int c) {
+    const int n = cores[c].end - cores[c].begin;
+    return 2 * marked(marks, value, &rb->core_cells[std::size_t(cores[c].begin)], n) > n;
   };
   // The core continuing one of the region's open ends across a gap, nearest first; that end is
   // then replaced by the partner's far end. {-1, 0} when none.
-  const auto join_partner = [&](JoinEnd open_ends[2], int stamp, int claim) -> JoinEnd {
+  const auto join_partner = [&](JoinEnd open_ends[2], int stamp) -> JoinEnd {
     JoinEnd best{-1, 0};
     int best_end = -1;
     float best_gap = join_gap;
@@ -312,7 +318,7 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
           const Eigen::Vector3f u(g.x() / gap, g.y() / gap, 0);
           if (ua.dot(u) < join_cos || -b.dir[f].dot(u) < join_cos) continue;
           if (std::abs(g.z()) > join_height_tol + kJoinMaxSlope * gap) continue;
-          if (mostly_marked(rb->stamp, stamp, k) || mostly_marked(rb->claim, claim, k)) continue;
+          if (core_mostly_marked(rb->stamp, stamp, k) || core_mostly_marked(rb->claim, claim, k)) continue;
           if (!gap_covered(pa, b.p[f])) continue;
           best = {k, f}, best_end = e, best_gap = gap;
         }
@@ -324,17 +330,10 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
 
   // 2. Grow each core while the normal of a neighbour is close to that of the boundary cell.
   int region_pool = 0;
-  const int claim = ++rb->claim_value;
-  // How many of the cells lie in regions already handed out.
-  const auto claimed = [&](const int* cells, int n) {
-    int in = 0;
-    for (int k = 0; k < n; ++k) in += rb->claim.pixels[std::size_t(cells[k])] == claim;
-    return in;
-  };
   for (int c = 0; c < n_cores && int(rb->candidates.size()) < cfg.max_candidates; ++c) {
     // A core lying mostly in the region of a larger one is another piece of that pipe's top.
     const int core_count = cores[c].end - cores[c].begin;
-    if (2 * claimed(&rb->core_cells[std::size_t(cores[c].begin)], core_count) > core_count) {
+    if (core_mostly_marked(rb->claim, claim, c)) {
       ++stats.claimed;
       continue;
     }
@@ -439,7 +438,7 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
     if (!found && !leaked && convex() && join_gap > 0) {
       JoinEnd open_ends[2] = {{c, 0}, {c, 1}};  // the joined strip's two ends
       for (int joins = 0; joins < kMaxJoins && !found; ++joins) {
-        const JoinEnd next = join_partner(open_ends, stamp, claim);
+        const JoinEnd next = join_partner(open_ends, stamp);
         if (next.core < 0) break;
         const int from = count;
         for (int k = cores[next.core].begin; k < cores[next.core].end && count < rb->max_region_cells; ++k) {
@@ -469,7 +468,7 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
     }
     // A region lying mostly in earlier ones is another piece of a pipe already taken up (a top
     // strip broken into pieces whose cores lay apart).
-    if (float(claimed(cells, count)) > float(cfg.region_max_claimed_share) * float(count)) {
+    if (float(marked(rb->claim, claim, cells, count)) > float(cfg.region_max_claimed_share) * float(count)) {
       ++stats.overlapping;
       continue;
     }
