@@ -90,12 +90,13 @@ TEST(Locator, NoPickablePoseIsTheTwinOfANearSymmetricPipe) {
 
 // A straight tube's ridge is a line: a turn about it is the noise's, and rolled the tube off its
 // own top (the ridge ICP ended more than D/2 from every ridge point in 6 of 11 regions of a pile
-// of 12 short tubes). With that turn left out, the top tubes of piles are found.
+// of 12 short tubes). With that turn left out, the top tubes of piles are found. Six piles: on
+// three (24 top tubes) one tube more or less moves the share by 4 %.
 TEST(Locator, StraightTubesOnAPileAreFound) {
   const PipeModel model = pipe_of("S85", 22, "straight");
   LocateConfig cfg;
   int top = 0, found = 0;
-  for (unsigned seed = 1; seed <= 3; ++seed) {
+  for (unsigned seed = 1; seed <= 6; ++seed) {
     const SimulatedScene s = pile_of(model, 12, seed);
     Locator loc(model, cfg, s.camera.intrinsics);
     const LocateOutput& out = loc.locate(s.depth_mm, s.camera);

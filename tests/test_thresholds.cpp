@@ -1,6 +1,7 @@
 // Thresholds derived from the model and from the noise measured in the frame.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <random>
 
 #include "locate/candidate.hpp"
@@ -65,6 +66,14 @@ TEST(Thresholds, FollowTheTubeAndTheNoiseUnlessGiven) {
   EXPECT_NEAR(paper.verify_tolerance_mm, 7, 0.5);
   EXPECT_NEAR(paper.refine_inlier_mm, 4, 0.5);
   EXPECT_NEAR(paper.normal_window_mm, 6.3, 0.1);
+  // A thin tube: 0.35 D would be 3 cells, whose plane fits are mostly noise; the window grows to
+  // what the noise needs (sqrt(8 sigma c)), and so with the noise.
+  LocateConfig thin_quiet = with_model_thresholds(user, 8.7f), thin_noisy = thin_quiet;
+  set_frame_thresholds(user, 8.7f, DepthNoise{0.3f, 745, 100000}, k, &thin_quiet);
+  set_frame_thresholds(user, 8.7f, DepthNoise{1.75f, 745, 100000}, k, &thin_noisy);
+  EXPECT_LT(thin_quiet.normal_window_mm, 3.5);  // 3 cells: the footprints bound it
+  EXPECT_NEAR(thin_noisy.normal_window_mm, std::sqrt(8 * 1.75 * 745 / k.fx), 1e-3);
+  EXPECT_GT(thin_noisy.normal_window_mm, 4.0);
   // A value given is used as given, unless raise_to_noise raises it to what the noise needs.
   LocateConfig pinned = user;
   pinned.verify_tolerance_mm = 5;

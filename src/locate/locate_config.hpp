@@ -22,13 +22,14 @@ struct LocateConfig {
   // tolerance are raised to what it needs when it needs more (1.8 and 3 sigma): a thin tube far
   // from a noisy sensor. Off: the values below alone.
   bool raise_to_noise = true;
-  // A length in mm left at 0 is derived (locate/thresholds.cpp): hole fill and normal window from
-  // D, the noise-dependent three from the depth noise measured in each frame. The defaults are the
-  // fixed values: derived, they cost recall on the zoo and the dev set (docs/experiments.md,
-  // "Thresholds"), so deriving them is a choice for a sensor far from the Kinect class at 1 m.
+  // A length in mm left at 0 is derived (locate/thresholds.cpp): hole fill from D, the normal
+  // window from D and the frame's noise, the noise-dependent three from the depth noise measured in
+  // each frame. The window is derived by default; the other four keep fixed defaults: derived, they
+  // cost the zoo (docs/experiments.md, "Thresholds", "Normal window").
   double hole_fill_mm = 8.0;      // glint holes up to this wide are filled (0: 0.44 D; under 2 cells: none)
-  double normal_window_mm = 7.0;  // plane-fit neighbourhood (0: 0.35 D, the part of the tube that is
-                                  // locally plane, and at least 2.5 pixel footprints)
+  double normal_window_mm = 0;    // plane-fit neighbourhood (0: derived per frame: 0.35 D, the part of
+                                  // the tube that is locally plane, but at least sqrt(8 sigma c), c a
+                                  // sample's spacing, and 2.5 pixel footprints)
   double normal_min_valid_share = 0.4;  // of the window's cells; fewer and the cell has no normal
 
   // II-B, Algorithm 1: candidate regions.

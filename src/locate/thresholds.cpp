@@ -40,8 +40,14 @@ constexpr double kVerifyToleranceOfSigma = 3.0, kVerifyToleranceMinMm = 2.5;
 // the refinement's inlier gate: 1.7 sigma, or a fifth of the tube (the ridge fit's own error);
 constexpr double kRefineInlierOfSigma = 1.7, kRefineInlierOfD = 0.2;
 constexpr double kMaxSigmaMm = 4.0;  // beyond this no threshold grows further
-// the plane-fit window spans at least this many pixel footprints (fewer fit the noise).
+// the plane-fit window spans at least this many pixel footprints (fewer fit the noise),
 constexpr double kNormalWindowMinFootprints = 2.5;
+// and its side w at least sqrt(this * sigma * c), c the larger of a Z-buffer cell and a pixel's
+// footprint: a plane fitted to (w / c)^2 samples of noise sigma has a slope error of
+// sqrt(12) sigma c / w^2, so this bounds it (to 0.43 rad per cell; the region growth judges many).
+// The paper's sensor (2.37 mm at 1 m, 1.75 mm footprints) gives 5.8 mm, its 7 mm window in whole
+// cells; on the zoo 8 did best of 4, 6, 8, 10, 12 and 20 (docs/experiments.md, "Normal window").
+constexpr double kNormalWindowOfNoise = 8.0;
 
 // The mean of the smallest `share` of the values in the histogram (bin centres).
 float trimmed_mean_of(const std::vector<int>& histogram, int total, float share, float bin) {
@@ -120,7 +126,9 @@ void set_frame_thresholds(const LocateConfig& user, float d, const DepthNoise& n
   cfg->frame_sigma_mm = sigma;
   if (user.normal_window_mm <= 0) {
     const double footprint_mm = double(noise.depth_mm) / std::max(1.0, camera.fx);
-    cfg->normal_window_mm = std::max(kNormalWindowOfD * d, kNormalWindowMinFootprints * footprint_mm);
+    const double sample_mm = std::max(cfg->zbuffer_pixel_mm, footprint_mm);
+    cfg->normal_window_mm = std::max({kNormalWindowOfD * d, kNormalWindowMinFootprints * footprint_mm,
+                                      std::sqrt(kNormalWindowOfNoise * sigma * sample_mm)});
   }
 }
 
