@@ -113,6 +113,39 @@ TEST(Locator, StraightTubesOnAPileAreFound) {
   EXPECT_GE(found, 0.8 * top) << found << " of " << top << " top tubes found";
 }
 
+// Beyond the paper: the region of a long pipe holds the top strip of a piece of it, along which a
+// leg can slide; refined again on every pixel the pose explains (the whole pipe seen), the pose
+// lands closer. A long planar bend (the zoo's 23 mm one, legs of 85 and 104 mm) in six piles of
+// ten: the top pipes found within 10 mm are 1.2 mm off on average (MSSD), 2.4 mm without.
+TEST(Locator, ALongBendIsPlacedByAllTheImageShowsOfIt) {
+  const PipeModel model = pipe_of("S85,B-134r188,S104", 23.3, "bend");
+  int found_on = 0, found_off = 0, top = 0, n_on = 0, n_off = 0;
+  double err_on = 0, err_off = 0;
+  for (unsigned seed = 1; seed <= 6; ++seed) {
+    const SimulatedScene s = pile_of(model, 10, seed);
+    for (const bool on : {true, false}) {
+      LocateConfig cfg;
+      cfg.refine_on_explained = on;
+      Locator loc(model, cfg, s.camera.intrinsics);
+      const LocateOutput& out = loc.locate(s.depth_mm, s.camera);
+      for (std::size_t g = 0; g < s.model_to_world.size(); ++g) {
+        if (!s.info[g].top) continue;
+        top += on;
+        double best = 1e9;
+        for (const PipeEstimate& e : out.estimates)
+          best = std::min(best, pose_error_with_turns(model, e.model_to_cam, s.model_to_cam(g)));
+        (on ? found_on : found_off) += best < 5;
+        if (best < 10) (on ? err_on : err_off) += best, (on ? n_on : n_off) += 1;
+      }
+    }
+  }
+  ASSERT_GT(top, 5);
+  ASSERT_GT(n_on, 5);
+  ASSERT_GT(n_off, 5);
+  EXPECT_GE(found_on, found_off);
+  EXPECT_LT(err_on / n_on, 0.7 * err_off / n_off) << err_on / n_on << " mm against " << err_off / n_off;
+}
+
 // An arc slides along itself: where its ends are hidden the image fits the slid pose as well.
 // No pose handed out as pickable may lie more than 10 mm from every arc of the pile.
 TEST(Locator, NoPickablePoseIsAnArcSlidAlongItself) {

@@ -16,6 +16,43 @@ Pose axis_frame(const AxisEstimate& est) {
   return place;
 }
 
+// Fewer explained pixels than this say too little to refine on.
+constexpr int kMinExplainedPoints = 50;
+// A pose the image confirms on less than this share of verify_min_agreement lies on no pipe: not
+// refined again (the same zoo figures as refining every pose, at two thirds of the cost).
+constexpr float kExplainedMinAgreementShare = 0.8f;
+
+// Beyond the paper: the observed points a verified pose explains (its rendered silhouette, depth
+// within the tolerance), in the bin frame, evenly thinned to the buffer's capacity: the whole
+// pipe the image shows, where the region held only its top strip. Returns how many.
+int explained_points(const CandidateContext& ctx, const Image<float>& rendered, const ProjectedMesh& projected,
+                     float tol, std::vector<Eigen::Vector3f>* out) {
+  int x0 = ctx.camera.width, y0 = ctx.camera.height, x1 = -1, y1 = -1;
+  for (const Eigen::Vector2d& px : projected.px) {
+    x0 = std::min(x0, int(std::floor(px.x()))), y0 = std::min(y0, int(std::floor(px.y())));
+    x1 = std::max(x1, int(std::ceil(px.x()))), y1 = std::max(y1, int(std::ceil(px.y())));
+  }
+  x0 = std::max(x0, 0), y0 = std::max(y0, 0);
+  x1 = std::min(x1, ctx.camera.width - 1), y1 = std::min(y1, ctx.camera.height - 1);
+  const auto explained = [&](int x, int y) {
+    const float zm = rendered.at(x, y), zo = ctx.depth.at(x, y);
+    return zm > 0 && zo > 0 && std::abs(zo - zm) <= tol;
+  };
+  int count = 0;
+  for (int y = y0; y <= y1; ++y)
+    for (int x = x0; x <= x1; ++x) count += explained(x, y);
+  const int capacity = int(out->size());
+  const int stride = count / std::max(1, capacity) + 1;
+  const Pose cam_to_bin = ctx.bin_to_cam.inverse();
+  int seen = 0, n = 0;
+  for (int y = y0; y <= y1; ++y)
+    for (int x = x0; x <= x1; ++x) {
+      if (!explained(x, y) || seen++ % stride != 0 || n >= capacity) continue;
+      (*out)[std::size_t(n++)] = (cam_to_bin * ctx.camera.unproject(x, y, ctx.depth.at(x, y))).cast<float>();
+    }
+  return n;
+}
+
 // RidgeFit::seen_through of a fit RidgeIcp::fit has just returned (its model ridge is still there).
 float seen_through(const CandidateContext& ctx, const RidgeFit& f, const CandidateBuffers& buf) {
   return seen_through_share(ctx.zb, buf.icp.model_ridge(), f.model_ridge_points,
@@ -121,6 +158,7 @@ void reserve_candidate(CandidateBuffers* buf, const LocatorModel& lm, const Star
   buf->icp.reserve(lm, cfg, ridge_capacity);
   reserve_slide(&buf->slide, lm, ridge_capacity, float(cfg.ridge_cell_mm));
   buf->region_pts.assign(std::size_t(max_region_cells), Eigen::Vector3f::Zero());
+  buf->explained_pts.assign(std::size_t(std::max(1, cfg.refine_max_points)), Eigen::Vector3f::Zero());
   buf->coarse_ridge.assign(std::size_t(ridge_capacity), Eigen::Vector3f::Zero());
   buf->coarse_in_axis.assign(std::size_t(ridge_capacity), Eigen::Vector3f::Zero());
   buf->fits.reserve(std::size_t(starts.size()));
@@ -272,7 +310,7 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
   // more than ambiguity_pose_mm apart.
   const auto judge = [&](const Pose& start, float ridge_cost_mm) {
     auto t0 = Clock::now();
-    const RefineResult refined = refine_on_surface(lm, start, buf->region_pts.data(), refine_count, cfg);
+    RefineResult refined = refine_on_surface(lm, start, buf->region_pts.data(), refine_count, cfg);
     buf->times.refine_ms += ms_since(t0);
     t0 = Clock::now();
     PipeEstimate e;
@@ -282,6 +320,31 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
                           float(cfg.verify_tolerance_mm), float(cfg.side_drop_of_d) * lm.tube_d_mm,
                           free_space_band_px(cfg, lm, ctx.camera, e.model_to_cam),
                           &buf->scratch_depth, &buf->scratch_mesh);
+    // Beyond the paper: refined again on all the image shows of the pipe where this pose put it
+    // (the region holds only its top strip, along which a leg can slide); kept if judged better.
+    if (cfg.refine_on_explained &&
+        e.check.agreement() >= kExplainedMinAgreementShare * float(cfg.verify_min_agreement)) {
+      const int n = explained_points(ctx, buf->scratch_depth, buf->scratch_mesh, float(cfg.verify_tolerance_mm),
+                                     &buf->explained_pts);
+      if (n >= kMinExplainedPoints) {
+        buf->times.verify_ms += ms_since(t0);
+        t0 = Clock::now();
+        const RefineResult again = refine_on_surface(lm, refined.pose, buf->explained_pts.data(), n, cfg);
+        buf->times.refine_ms += ms_since(t0);
+        t0 = Clock::now();
+        const Pose to_cam = ctx.bin_to_cam * again.pose;
+        const Verification v = verify_pose(lm.verify_mesh, lm.verify_winding, to_cam, ctx.depth, ctx.camera,
+                                           float(cfg.verify_tolerance_mm), float(cfg.side_drop_of_d) * lm.tube_d_mm,
+                                           free_space_band_px(cfg, lm, ctx.camera, to_cam),
+                                           &buf->scratch_depth, &buf->scratch_mesh);
+        if (hypothesis_quality(v) > hypothesis_quality(e.check)) {
+          refined = again;
+          e.model_to_bin = again.pose;
+          e.model_to_cam = to_cam;
+          e.check = v;
+        }
+      }
+    }
     if (reads_ends(ctx))
       judge_ends(lm.centreline_points, lm.tube_d_mm, e.model_to_cam, ctx.depth, ctx.camera,
                  float(cfg.verify_tolerance_mm), &e.check);

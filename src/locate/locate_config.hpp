@@ -84,6 +84,8 @@ struct LocateConfig {
   // Beyond the paper: surface refinement, verification, ambiguity.
   int refine_iterations = 12;
   int refine_max_points = 1500;            // observed points used by the refinement
+  bool refine_on_explained = true;  // then again on every pixel the refined pose explains (the
+                                    // whole pipe seen, not only its region's top strip), if better
   double refine_inlier_mm = 4;     // point-to-plane pairs farther than this are not the pipe
                                    // (0: 1.7 sigma of the frame's measured noise, at least 0.2 D)
   double verify_tolerance_mm = 7;  // depth agreement, 3 sigma of a Kinect-class sensor's noise at 1.1 m
