@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The zoo's machinery on two small shapes of two images: make-pipe -> simulate (both sensors) ->
-# eval-bop --picks -> score --picks, and a bin cleared through `serve` by the stand-in PLC. Checks
+# eval-bop --picks -> score --picks, and two bins cleared through `serve` by the stand-in PLC. Checks
 # that the table is printed and every figure is in range; not how good the localizer is.
 set -euo pipefail
 bin="$1"
@@ -9,7 +9,7 @@ work="$(mktemp -d)"
 trap 'rm -rf "$work"' EXIT
 fail() { echo "FAIL: $*" >&2; exit 1; }
 
-"$here/tools/zoo" --bin "$bin" --out "$work/zoo" --shapes 15,20 --images 2 --jobs 2 \
+"$here/tools/zoo" --bin "$bin" --out "$work/zoo" --shapes 15,20 --images 2 --jobs 2 --bins 2 \
   --json "$work/zoo.json" > "$work/zoo.txt" 2>&1 || fail "tools/zoo failed: $(tail -20 "$work/zoo.txt")"
 grep -qE '^15-arc ' "$work/zoo.txt" || fail "no row for 15-arc: $(cat "$work/zoo.txt")"
 grep -q '^overall: recall@5' "$work/zoo.txt" || fail "no overall line: $(cat "$work/zoo.txt")"
@@ -25,7 +25,7 @@ for r in z["rows"]:
     for k in ("top_recall_5mm", "pick_rate", "precision_10mm"):
         assert s[k] is None or 0 <= s[k] <= 1, (k, s[k])
     assert 0 <= s["wrong_picks"] <= s["picks"] <= 2, s
-    assert c["pipes"] == r["pipes"], c          # the bin held the pile asked for
+    assert c["bins"] == 2 and c["pipes"] == 2 * r["pipes"], c  # each bin held the pile asked for
     assert 0 <= c["taken"] <= c["pipes"] and c["locates"] >= 1, c
     assert c["stop"] in ("done_none", "limit"), c
     assert c["locates"] >= c["taken"] + 1 or c["stop"] == "limit", c  # each pipe taken by a pick, then DONE_NONE
@@ -34,4 +34,7 @@ PY
 "$here/tools/zoo" --bin "$bin" --out "$work/zoo" --shapes 15 --images 2 --reuse --no-clear > "$work/zoo2.txt" 2>&1 ||
   fail "--reuse run failed: $(tail -20 "$work/zoo2.txt")"
 grep -qE '^15-arc ' "$work/zoo2.txt" || fail "--reuse: no row"
+# A bad count is refused, naming the option.
+if "$here/tools/zoo" --bin "$bin" --out "$work/zoo" --bins 0 > "$work/zoo3.txt" 2>&1; then fail "--bins 0 accepted"; fi
+grep -q -- '--bins 0' "$work/zoo3.txt" || fail "--bins 0: no message naming it: $(cat "$work/zoo3.txt")"
 echo "zoo machinery: ok"
