@@ -308,18 +308,23 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
   bool &have_best = out.have_best, &have_second = out.have_second;
   // Refines a hypothesis on the region, has the image judge it, and keeps the best two that are
   // more than ambiguity_pose_mm apart.
+  // The image's judgement of a pose (model to camera); renders into the scratch buffers.
+  const auto verify_at = [&](const Pose& model_to_cam) {
+    return verify_pose(lm.verify_mesh, lm.verify_winding, model_to_cam, ctx.depth, ctx.camera,
+                       float(cfg.verify_tolerance_mm), float(cfg.side_drop_of_d) * lm.tube_d_mm,
+                       free_space_band_px(cfg, lm, ctx.camera, model_to_cam), &buf->scratch_depth,
+                       &buf->scratch_mesh);
+  };
   const auto judge = [&](const Pose& start, float ridge_cost_mm) {
     auto t0 = Clock::now();
     RefineResult refined = refine_on_surface(lm, start, buf->region_pts.data(), refine_count, cfg);
+    int refined_on = refine_count;
     buf->times.refine_ms += ms_since(t0);
     t0 = Clock::now();
     PipeEstimate e;
     e.model_to_bin = refined.pose;
     e.model_to_cam = ctx.bin_to_cam * refined.pose;
-    e.check = verify_pose(lm.verify_mesh, lm.verify_winding, e.model_to_cam, ctx.depth, ctx.camera,
-                          float(cfg.verify_tolerance_mm), float(cfg.side_drop_of_d) * lm.tube_d_mm,
-                          free_space_band_px(cfg, lm, ctx.camera, e.model_to_cam),
-                          &buf->scratch_depth, &buf->scratch_mesh);
+    e.check = verify_at(e.model_to_cam);
     // Beyond the paper: refined again on all the image shows of the pipe where this pose put it
     // (the region holds only its top strip, along which a leg can slide); kept if judged better.
     if (cfg.refine_on_explained &&
@@ -332,15 +337,13 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
         const RefineResult again = refine_on_surface(lm, refined.pose, buf->explained_pts.data(), n, cfg);
         buf->times.refine_ms += ms_since(t0);
         t0 = Clock::now();
-        const Pose to_cam = ctx.bin_to_cam * again.pose;
-        const Verification v = verify_pose(lm.verify_mesh, lm.verify_winding, to_cam, ctx.depth, ctx.camera,
-                                           float(cfg.verify_tolerance_mm), float(cfg.side_drop_of_d) * lm.tube_d_mm,
-                                           free_space_band_px(cfg, lm, ctx.camera, to_cam),
-                                           &buf->scratch_depth, &buf->scratch_mesh);
+        const Pose again_to_cam = ctx.bin_to_cam * again.pose;
+        const Verification v = verify_at(again_to_cam);
         if (hypothesis_quality(v) > hypothesis_quality(e.check)) {
           refined = again;
+          refined_on = n;
           e.model_to_bin = again.pose;
-          e.model_to_cam = to_cam;
+          e.model_to_cam = again_to_cam;
           e.check = v;
         }
       }
@@ -355,7 +358,7 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
     e.ridge_cost_mm = ridge_cost_mm;
     e.ridge_points = observed.count;
     e.refine_inliers = refined.inliers;
-    e.refine_points = refine_count;
+    e.refine_points = refined_on;
     e.refine_rms_mm = refined.rms_mm;
     e.candidate = in.index;
     const float q = hypothesis_quality(e.check);

@@ -45,7 +45,7 @@ struct PipeEstimate {
   float ridge_cost_mm = 0;  // Algorithm 2 residual (mean truncated ridge distance)
   int ridge_points = 0;     // observed Z-ridge points of the region
   int refine_inliers = 0;
-  int refine_points = 0;  // observed region points the refinement used
+  int refine_points = 0;  // observed points the refinement used (the region's, or those the pose explains)
   float refine_rms_mm = 0;
   Verification check;
   bool ambiguous = false;  // another pose of the model fits about as well (torus-like pipes)
