@@ -24,16 +24,11 @@ constexpr float kExplainedMinAgreementShare = 0.8f;
 
 // Beyond the paper: the observed points a verified pose explains (its rendered silhouette, depth
 // within the tolerance), in the bin frame, evenly thinned to the buffer's capacity: the whole
-// pipe the image shows, where the region held only its top strip. Returns how many.
-int explained_points(const CandidateContext& ctx, const Image<float>& rendered, const ProjectedMesh& projected,
-                     float tol, std::vector<Eigen::Vector3f>* out) {
-  int x0 = ctx.camera.width, y0 = ctx.camera.height, x1 = -1, y1 = -1;
-  for (const Eigen::Vector2d& px : projected.px) {
-    x0 = std::min(x0, int(std::floor(px.x()))), y0 = std::min(y0, int(std::floor(px.y())));
-    x1 = std::max(x1, int(std::ceil(px.x()))), y1 = std::max(y1, int(std::ceil(px.y())));
-  }
-  x0 = std::max(x0, 0), y0 = std::max(y0, 0);
-  x1 = std::min(x1, ctx.camera.width - 1), y1 = std::min(y1, ctx.camera.height - 1);
+// pipe the image shows, where the region held only its top strip. `rendered` holds the depths
+// verify_pose() drew in v.box. Returns how many.
+int explained_points(const CandidateContext& ctx, const Image<float>& rendered, const Verification& v, float tol,
+                     std::vector<Eigen::Vector3f>* out) {
+  const int x0 = v.box.x0, y0 = v.box.y0, x1 = v.box.x1, y1 = v.box.y1;
   const auto explained = [&](int x, int y) {
     const float zm = rendered.at(x, y), zo = ctx.depth.at(x, y);
     return zm > 0 && zo > 0 && std::abs(zo - zm) <= tol;
@@ -306,8 +301,6 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
   const float ambiguity_mm = float(cfg.ambiguity_pose_mm);
   PipeEstimate &best = out.best, &second = out.second;
   bool &have_best = out.have_best, &have_second = out.have_second;
-  // Refines a hypothesis on the region, has the image judge it, and keeps the best two that are
-  // more than ambiguity_pose_mm apart.
   // The image's judgement of a pose (model to camera); renders into the scratch buffers.
   const auto verify_at = [&](const Pose& model_to_cam) {
     return verify_pose(lm.verify_mesh, lm.verify_winding, model_to_cam, ctx.depth, ctx.camera,
@@ -315,6 +308,8 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
                        free_space_band_px(cfg, lm, ctx.camera, model_to_cam), &buf->scratch_depth,
                        &buf->scratch_mesh);
   };
+  // Refines a hypothesis on the region, has the image judge it, and keeps the best two that are
+  // more than ambiguity_pose_mm apart.
   const auto judge = [&](const Pose& start, float ridge_cost_mm) {
     auto t0 = Clock::now();
     RefineResult refined = refine_on_surface(lm, start, buf->region_pts.data(), refine_count, cfg);
@@ -329,7 +324,7 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
     // (the region holds only its top strip, along which a leg can slide); kept if judged better.
     if (cfg.refine_on_explained &&
         e.check.agreement() >= kExplainedMinAgreementShare * float(cfg.verify_min_agreement)) {
-      const int n = explained_points(ctx, buf->scratch_depth, buf->scratch_mesh, float(cfg.verify_tolerance_mm),
+      const int n = explained_points(ctx, buf->scratch_depth, e.check, float(cfg.verify_tolerance_mm),
                                      &buf->explained_pts);
       if (n >= kMinExplainedPoints) {
         buf->times.verify_ms += ms_since(t0);

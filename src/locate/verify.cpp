@@ -18,7 +18,8 @@ Verification verify_pose(const Mesh& mesh, Winding winding, const Pose& model_to
                          const Image<float>& depth, const Intrinsics& k, float tol, float side_drop_mm,
                          int free_band_px, Image<float>* scratch, ProjectedMesh* projected) {
   Verification v;
-  const PixelBox box = render_depth_in_box(mesh, model_to_cam, k, scratch, projected, winding);
+  v.box = render_depth_in_box(mesh, model_to_cam, k, scratch, projected, winding);
+  const PixelBox& box = v.box;
   int outside = 0;
   for (std::size_t i = 0; i < mesh.vertices.size() && projected->cam.size() >= mesh.vertices.size(); ++i) {
     const Eigen::Vector2d& px = projected->px[i];

@@ -37,6 +37,7 @@ struct Verification {
   float side_level() const { return side_px ? float(side_level_px) / float(side_px) : 0.f; }
   float below_floor = 0;  // share of the model more than kBelowFloorOfD * D under the lowest surface seen
   float outside_view = 0;  // share of the model's vertices outside the image: seen nowhere
+  PixelBox box;            // the pixels the model was drawn in (the scratch image holds its depths)
   // The tube's two ends (judge_ends): pinned where the image shows it ends there (the surface
   // beyond lies lower), continued where the tube's surface goes on beyond it (a pose slid along
   // the pipe); neither where nothing is seen there (out of view, no reading, something in front).
