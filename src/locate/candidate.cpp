@@ -154,6 +154,7 @@ void reserve_candidate(CandidateBuffers* buf, const LocatorModel& lm, const Star
   reserve_slide(&buf->slide, lm, ridge_capacity, float(cfg.ridge_cell_mm));
   buf->region_pts.assign(std::size_t(max_region_cells), Eigen::Vector3f::Zero());
   buf->explained_pts.assign(std::size_t(std::max(1, cfg.refine_max_points)), Eigen::Vector3f::Zero());
+  buf->found_pts.assign(buf->explained_pts.size(), Eigen::Vector3f::Zero());
   buf->coarse_ridge.assign(std::size_t(ridge_capacity), Eigen::Vector3f::Zero());
   buf->coarse_in_axis.assign(std::size_t(ridge_capacity), Eigen::Vector3f::Zero());
   buf->fits.reserve(std::size_t(starts.size()));
@@ -308,12 +309,12 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
                        free_space_band_px(cfg, lm, ctx.camera, model_to_cam), &buf->scratch_depth,
                        &buf->scratch_mesh);
   };
-  // Refines a hypothesis on the region, has the image judge it, and keeps the best two that are
-  // more than ambiguity_pose_mm apart.
-  const auto judge = [&](const Pose& start, float ridge_cost_mm) {
+  // Refines a hypothesis on observed points (the region's), has the image judge it, and keeps
+  // the best two that are more than ambiguity_pose_mm apart.
+  const auto judge = [&](const Pose& start, float ridge_cost_mm, const Eigen::Vector3f* points, int n_points) {
     auto t0 = Clock::now();
-    RefineResult refined = refine_on_surface(lm, start, buf->region_pts.data(), refine_count, cfg);
-    int refined_on = refine_count;
+    RefineResult refined = refine_on_surface(lm, start, points, n_points, cfg);
+    int refined_on = n_points;
     buf->times.refine_ms += ms_since(t0);
     t0 = Clock::now();
     PipeEstimate e;
@@ -376,22 +377,43 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
     if (seen) continue;
     if (deadline.passed()) return out;  // an unchecked runner-up could hide an ambiguity
     ++tried;
-    judge(fits[i].pose, fits[i].cost_mm);
+    judge(fits[i].pose, fits[i].cost_mm, buf->region_pts.data(), refine_count);
   }
   // Beyond the paper: a near-symmetric part (a half-turn maps most of it onto itself) seen only
   // where the two poses agree fits both equally; the ridge ICP need not have reached the other.
   // The twin of the best hypothesis is judged too, so that the ambiguity is found, or the twin
   // taken when the image prefers it. A twin the runner-up already stands for is not judged again.
-  if (have_best) {
+  // A twin is refined on all the image shows of the pipe the best lies on, where the region's top
+  // strip may hold too little of it: a twin a leg's difference away slides off a strip, not off
+  // the whole pipe. A twin that wins has its own twin judged in turn (the first best may itself
+  // have been a twin badly placed), at most kTwinRounds times.
+  constexpr int kTwinRounds = 4;
+  for (int round = 0; have_best && round < kTwinRounds && !ctx.model.near_symmetries.empty(); ++round) {
     const Pose found = best.model_to_bin;  // judging a twin may replace the best: twins of this one
     const float found_cost_mm = best.ridge_cost_mm;
+    const Eigen::Vector3f* twin_points = buf->region_pts.data();
+    int twin_count = refine_count;
+    if (cfg.refine_on_explained) {
+      const auto t0 = Clock::now();
+      const Verification v = verify_at(best.model_to_cam);
+      const int n = explained_points(ctx, buf->scratch_depth, v, float(cfg.verify_tolerance_mm), &buf->found_pts);
+      if (n >= kMinExplainedPoints) twin_points = buf->found_pts.data(), twin_count = n;
+      buf->times.verify_ms += ms_since(t0);
+    }
     for (const Pose& half_turn : ctx.model.near_symmetries) {
       const Pose twin = found * half_turn;
-      if (have_second && pick_distance_mm(lm, twin, second.model_to_bin, ambiguity_mm) <= ambiguity_mm)
+      // (a runner-up the region refined stands for the twin only if the twin is refined on it too)
+      if (twin_points == buf->region_pts.data() && have_second &&
+          pick_distance_mm(lm, twin, second.model_to_bin, ambiguity_mm) <= ambiguity_mm)
         continue;
       if (deadline.passed()) return out;
-      judge(twin, found_cost_mm);
+      judge(twin, found_cost_mm, twin_points, twin_count);
     }
+    if (pick_distance_mm(lm, found, best.model_to_bin, ambiguity_mm) <= ambiguity_mm) break;  // the best held
+  }
+  if (have_best) {
+    const Pose found = best.model_to_bin;
+    const float found_cost_mm = best.ridge_cost_mm;
     // Beyond the paper: a pipe slid along itself (an arc about its centre, a coil along its helix)
     // shows the same surface wherever its ends are not seen: the slid poses are rivals too.
     for (std::size_t k = 0; cfg.judge_slides && k < lm.slides.size(); ++k) {
@@ -399,7 +421,7 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
       if (have_second && pick_distance_mm(lm, slid, second.model_to_bin, ambiguity_mm) <= ambiguity_mm)
         continue;
       if (deadline.passed()) return out;
-      judge(slid, found_cost_mm);
+      judge(slid, found_cost_mm, buf->region_pts.data(), refine_count);
     }
   }
   out.complete = true;
