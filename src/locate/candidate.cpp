@@ -309,9 +309,10 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
                        free_space_band_px(cfg, lm, ctx.camera, model_to_cam), &buf->scratch_depth,
                        &buf->scratch_mesh);
   };
-  // Refines a hypothesis on observed points (the region's), has the image judge it, and keeps
-  // the best two that are more than ambiguity_pose_mm apart.
-  const auto judge = [&](const Pose& start, float ridge_cost_mm, const Eigen::Vector3f* points, int n_points) {
+  // Refines a hypothesis on observed points (the region's; a twin's, those the best explains),
+  // has the image judge it, and keeps the best two that are more than ambiguity_pose_mm apart.
+  const auto judge = [&](const Pose& start, float ridge_cost_mm, const Eigen::Vector3f* points,
+                         int n_points) {
     auto t0 = Clock::now();
     RefineResult refined = refine_on_surface(lm, start, points, n_points, cfg);
     int refined_on = n_points;
@@ -382,11 +383,11 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
   // Beyond the paper: a near-symmetric part (a half-turn maps most of it onto itself) seen only
   // where the two poses agree fits both equally; the ridge ICP need not have reached the other.
   // The twin of the best hypothesis is judged too, so that the ambiguity is found, or the twin
-  // taken when the image prefers it. A twin the runner-up already stands for is not judged again.
-  // A twin is refined on all the image shows of the pipe the best lies on, where the region's top
-  // strip may hold too little of it: a twin a leg's difference away slides off a strip, not off
-  // the whole pipe. A twin that wins has its own twin judged in turn (the first best may itself
-  // have been a twin badly placed), at most kTwinRounds times.
+  // taken when the image prefers it. A twin is refined on all the image shows of the pipe the
+  // best lies on, where the region's top strip may hold too little of it: a twin a leg's
+  // difference away slides off a strip, not off the whole pipe. A twin that wins has its own twin
+  // judged in turn (the first best may itself have been a twin badly placed), at most
+  // kTwinRounds times.
   constexpr int kTwinRounds = 4;
   for (int round = 0; have_best && round < kTwinRounds && !ctx.model.near_symmetries.empty(); ++round) {
     const Pose found = best.model_to_bin;  // judging a twin may replace the best: twins of this one
@@ -396,23 +397,24 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
     if (cfg.refine_on_explained) {
       const auto t0 = Clock::now();
       const Verification v = verify_at(best.model_to_cam);
-      const int n = explained_points(ctx, buf->scratch_depth, v, float(cfg.verify_tolerance_mm), &buf->found_pts);
+      const int n =
+          explained_points(ctx, buf->scratch_depth, v, float(cfg.verify_tolerance_mm), &buf->found_pts);
       if (n >= kMinExplainedPoints) twin_points = buf->found_pts.data(), twin_count = n;
       buf->times.verify_ms += ms_since(t0);
     }
     for (const Pose& half_turn : ctx.model.near_symmetries) {
       const Pose twin = found * half_turn;
-      // (a runner-up the region refined stands for the twin only if the twin is refined on it too)
+      // A runner-up the region refined stands for the twin only if the twin is refined there too.
       if (twin_points == buf->region_pts.data() && have_second &&
           pick_distance_mm(lm, twin, second.model_to_bin, ambiguity_mm) <= ambiguity_mm)
         continue;
       if (deadline.passed()) return out;
       judge(twin, found_cost_mm, twin_points, twin_count);
     }
-    if (pick_distance_mm(lm, found, best.model_to_bin, ambiguity_mm) <= ambiguity_mm) break;  // the best held
+    if (pick_distance_mm(lm, found, best.model_to_bin, ambiguity_mm) <= ambiguity_mm) break;  // it held
   }
   if (have_best) {
-    const Pose found = best.model_to_bin;
+    const Pose found = best.model_to_bin;  // the best after its twins: slid poses of this one
     const float found_cost_mm = best.ridge_cost_mm;
     // Beyond the paper: a pipe slid along itself (an arc about its centre, a coil along its helix)
     // shows the same surface wherever its ends are not seen: the slid poses are rivals too.

@@ -150,8 +150,8 @@ struct CandidateBuffers {
   RidgeIcp icp;
   SlideBuffers slide;
   std::vector<Eigen::Vector3f> region_pts;
-  std::vector<Eigen::Vector3f> explained_pts;  // capacity refine_max_points
-  std::vector<Eigen::Vector3f> found_pts;      // ... those the best hypothesis explains (its twins start on them)
+  std::vector<Eigen::Vector3f> explained_pts;   // capacity refine_max_points
+  std::vector<Eigen::Vector3f> found_pts;       // ... those the best explains (its twins start on them)
   std::vector<Eigen::Vector3f> coarse_ridge;    // the region's Z-ridge on the probes' cells
   std::vector<Eigen::Vector3f> coarse_in_axis;  // the same in the frame of the observed axis
   std::vector<RidgeFit> fits;
