@@ -392,24 +392,26 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
   for (int round = 0; have_best && round < kTwinRounds && !ctx.model.near_symmetries.empty(); ++round) {
     const Pose found = best.model_to_bin;  // judging a twin may replace the best: twins of this one
     const float found_cost_mm = best.ridge_cost_mm;
-    const Eigen::Vector3f* twin_points = buf->region_pts.data();
-    int twin_count = refine_count;
+    int found_count = 0;  // the points the best explains, if enough to refine on
     if (cfg.refine_on_explained) {
       const auto t0 = Clock::now();
       const Verification v = verify_at(best.model_to_cam);
-      const int n =
+      found_count =
           explained_points(ctx, buf->scratch_depth, v, float(cfg.verify_tolerance_mm), &buf->found_pts);
-      if (n >= kMinExplainedPoints) twin_points = buf->found_pts.data(), twin_count = n;
+      if (found_count < kMinExplainedPoints) found_count = 0;
       buf->times.verify_ms += ms_since(t0);
     }
     for (const Pose& half_turn : ctx.model.near_symmetries) {
       const Pose twin = found * half_turn;
       // A runner-up the region refined stands for the twin only if the twin is refined there too.
-      if (twin_points == buf->region_pts.data() && have_second &&
+      if (found_count == 0 && have_second &&
           pick_distance_mm(lm, twin, second.model_to_bin, ambiguity_mm) <= ambiguity_mm)
         continue;
       if (deadline.passed()) return out;
-      judge(twin, found_cost_mm, twin_points, twin_count);
+      if (found_count > 0)
+        judge(twin, found_cost_mm, buf->found_pts.data(), found_count);
+      else
+        judge(twin, found_cost_mm, buf->region_pts.data(), refine_count);
     }
     if (pick_distance_mm(lm, found, best.model_to_bin, ambiguity_mm) <= ambiguity_mm) break;  // it held
   }
