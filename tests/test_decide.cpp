@@ -128,11 +128,16 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
        false, true, 0.9f},
       {"accepted under another pipe", judged(seen(800, 0, 200)), true, CandidateOutcome::accepted, false,
        false, 0.64f},
-      // Out of the view the image checks nothing: as unseen as under another pipe.
-      {"a fifth out of the view", judged(outside_view(seen(900, 0, 0), 0.2f)), true,
-       CandidateOutcome::accepted, false, false, 0.9f},
+      // Out of the view the image checks nothing: that part counts as not confirmed, and the
+      // image must still confirm verify_min_agreement of the whole pipe.
+      {"a fifth out of the view, the rest confirmed", judged(outside_view(seen(900, 0, 0), 0.2f)), true,
+       CandidateOutcome::accepted, false, true, 0.9f},
+      {"a fifth out of the view, too little confirmed", judged(outside_view(seen(800, 0, 0), 0.2f)), true,
+       CandidateOutcome::accepted, false, false, 0.8f},
+      {"a third out of the view", judged(outside_view(seen(1000, 0, 0), 0.35f)), true,
+       CandidateOutcome::accepted, false, false, 1.0f},
       {"a tenth under a pipe, a tenth out of the view", judged(outside_view(seen(900, 0, 100), 0.1f)), true,
-       CandidateOutcome::accepted, false, false, 0.81f},
+       CandidateOutcome::accepted, false, true, 0.81f},
       {"a twentieth out of the view", judged(outside_view(seen(900, 0, 0), 0.05f)), true,
        CandidateOutcome::accepted, false, true, 0.9f},
       {"rival about as good: ambiguous", judged_with_rival(seen(900, 0, 0), seen(860, 0, 0)), true,
@@ -179,6 +184,9 @@ TEST(Decide, ThresholdsComeFromTheConfig) {
   EXPECT_EQ(decide(judged(seen(650, 0, 0)), cfg).outcome, CandidateOutcome::accepted);
   cfg.verify_max_occluded = 0.3;
   EXPECT_TRUE(decide(judged(seen(800, 0, 200)), cfg).pickable);
+  EXPECT_FALSE(decide(judged(outside_view(seen(1000, 0, 0), 0.35f)), cfg).pickable);
+  cfg.verify_max_outside_view = 0.4;
+  EXPECT_TRUE(decide(judged(outside_view(seen(1000, 0, 0), 0.35f)), cfg).pickable);
   cfg.ambiguity_quality_margin = 0.01;
   EXPECT_FALSE(decide(judged_with_rival(seen(900, 0, 0), seen(860, 0, 0)), cfg).ambiguous);
 }

@@ -138,9 +138,14 @@ Decision decide(const Evidence& e, const LocateConfig& cfg) {
   if (e.ends_must_pin && (e.best.ends_pinned == 0 || e.best.ends_continued > 0)) out.ambiguous = true;
   out.score =
       e.best.agreement() * (1.0f - e.best.occluded()) * (out.ambiguous ? kAmbiguousScoreFactor : 1.0f);
-  // A pose is handed out only where the image could check it: under another pipe or out of the
-  // view, at most verify_max_occluded of it is unseen.
-  out.pickable = !out.ambiguous && e.best.occluded() + e.best.outside_view <= float(cfg.verify_max_occluded);
+  // A pose is handed out only where the image could check it: at most verify_max_occluded of it
+  // under something in front, at most verify_max_outside_view of it out of the view, and what
+  // the image confirms is still verify_min_agreement of the whole pipe, the part out of the view
+  // counted as not confirmed (a pose hanging out of the view is checked on too little of it).
+  const float confirmed_of_whole = e.best.agreement() * (1.0f - e.best.outside_view);
+  out.pickable = !out.ambiguous && e.best.occluded() <= float(cfg.verify_max_occluded) &&
+                 e.best.outside_view <= float(cfg.verify_max_outside_view) &&
+                 confirmed_of_whole >= float(cfg.verify_min_agreement);
   return out;
 }
 

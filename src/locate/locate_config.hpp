@@ -95,6 +95,8 @@ struct LocateConfig {
   double free_space_band_of_d = 0.125;     // ... not counting a band this * D wide inside the rim
                                            // (in pixels at the pose's distance; 0: the rim only)
   double verify_max_occluded = 0.15;       // share of model pixels covered by something in front
+  double verify_max_outside_view = 0.3;    // share of the model's vertices outside the image (and
+                                           // agreement * (1 - this share) >= verify_min_agreement)
   double side_drop_of_d = 0.25;            // a pipe's surroundings lie at least this * D beyond its silhouette ...
   double verify_max_side_level = 0.3;      // ... but for at most this share (more: a smooth blob, not a pipe)
   int verify_hypotheses = 3;               // distinct ridge fits refined and checked per region
