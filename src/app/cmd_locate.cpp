@@ -122,10 +122,10 @@ void add_locate(CLI::App& app) {
     }
     spdlog::info(
         "{} pipes found ({} candidate regions ({} of pieces joined across gaps), {} cores ({} split off "
-        "touching pipes), {} of them in a larger one's region, {} grown mostly into earlier regions; {} "
-        "shorter than a * L, {} not convex, {} leaked) in {:.1f} ms; pick: {}",
+        "touching pipes, {} standing on the floor), {} of them in a larger one's region, {} grown mostly "
+        "into earlier regions; {} shorter than a * L, {} not convex, {} leaked) in {:.1f} ms; pick: {}",
         out.estimates.size(), out.regions.candidates, out.regions.joined, out.regions.cores_kept,
-        out.regions.split_cores,
+        out.regions.split_cores, out.regions.raised_cores,
         out.regions.claimed, out.regions.overlapping, out.regions.short_regions, out.regions.not_convex,
         out.regions.leaked, out.times.total_ms,
         pick >= 0 ? "rank " + std::to_string(pick) : std::string("none"));

@@ -18,6 +18,11 @@ constexpr float kJoinMaxSlope = 0.3f;  // height change per mm of gap (a pipe le
 struct JoinEnd {
   int core, end;
 };
+// The top of a pipe resting on a surface stands at least about 0.85 D above it (where its normal
+// is within 45 degrees of up); cells higher than half of D, and than the noise, above the plane a
+// core too large to be pipes lies in are taken for pipes' tops.
+constexpr float kTopRiseOfD = 0.5f;
+constexpr float kTopRiseOfSigma = 3.0f;
 const int kDi[8] = {-1, 0, 1, -1, 1, -1, 0, 1};
 const int kDj[8] = {-1, -1, -1, 0, 0, 1, 1, 1};
 
@@ -180,8 +185,61 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
     return (has_normal(l) && has_normal(r) && l.x() - r.x() > valley_turn) ||
            (has_normal(b) && has_normal(t) && b.y() - t.y() > valley_turn);
   };
+  // Beyond the paper: a core far larger than pipes side by side can be is the floor (or a flat
+  // surface under the pipes), and a thin pipe lying on it joins it where noise turned a normal on
+  // the pipe's side upward. The pipe's top stands clear above the plane the core lies in: the
+  // floor's own cells lie in it within the noise, the top of a pipe resting on it about D above.
+  const float rise_min = std::max(kTopRiseOfD * d, kTopRiseOfSigma * float(cfg.frame_sigma_mm));
+  // The plane z = a i + b j + c the cells of pool[begin, end) lie in (least squares, cell units
+  // about the core's first cell: no cancellation).
+  const auto fitted_plane = [&](int begin, int end) {
+    const int i0 = column_of(rb->queue[begin]), j0 = row_of(rb->queue[begin]);
+    Eigen::Matrix3d a = Eigen::Matrix3d::Zero();
+    Eigen::Vector3d b = Eigen::Vector3d::Zero();
+    for (int k = begin; k < end; ++k) {
+      const Eigen::Vector3d u(column_of(rb->queue[k]) - i0, row_of(rb->queue[k]) - j0, 1.0);
+      a += u * u.transpose(), b += u * double(zb.z.pixels[std::size_t(rb->core_cells[k])]);
+    }
+    const Eigen::Vector3d abc = a.ldlt().solve(b);
+    return [abc, i0, j0](int i, int j) { return float(abc[0] * (i - i0) + abc[1] * (j - j0) + abc[2]); };
+  };
   constexpr std::uint8_t kOpen = 1, kSplit = 2;
   const int pool_capacity = int(rb->core_cells.size());
+  // The cells of the dropped core pool[begin, end) for which `piece_cell` holds, labelled again
+  // into the pool after it (none when there is no room for them all): the pieces that pass as
+  // cores are kept where the whole core was. Returns how many.
+  const auto split_core = [&](int begin, int end, const auto& piece_cell) {
+    int marked_cells = 0;
+    for (int k = begin; k < end; ++k) {
+      const int ci = column_of(rb->queue[k]), cj = row_of(rb->queue[k]);
+      if (piece_cell(ci, cj)) open.at(ci, cj) = kSplit, ++marked_cells;
+    }
+    if (end + marked_cells > pool_capacity) {
+      for (int k = begin; k < end; ++k) open.pixels[std::size_t(rb->core_cells[k])] = 0;
+      return 0;
+    }
+    // The pieces are labelled after the whole core, which is read to its end for their seeds.
+    pool = end;
+    const int first_piece = n_cores;
+    for (int k = begin; k < end; ++k) {
+      const int ci = column_of(rb->queue[k]), cj = row_of(rb->queue[k]);
+      if (open.at(ci, cj) != kSplit) continue;
+      const int piece = pool;
+      if (!keep_core(piece, label(ci, cj, kSplit))) pool = piece;
+    }
+    // Then the pieces kept move down to where the whole core was (no overlap: they hold a
+    // subset of its cells and lie after it).
+    int write = begin;
+    for (int c = first_piece; c < n_cores; ++c) {
+      Core& kept = cores[c];
+      std::copy(&rb->queue[kept.begin], &rb->queue[kept.end], &rb->queue[write]);
+      std::copy(&rb->core_cells[kept.begin], &rb->core_cells[kept.end], &rb->core_cells[write]);
+      kept.end = write + (kept.end - kept.begin), kept.begin = write, kept.split = true;
+      write = kept.end;
+    }
+    pool = write;
+    return n_cores - first_piece;
+  };
   for (int j = 0; j < zb.height; ++j) {
     for (int i = 0; i < zb.width; ++i) {
       if (open.at(i, j) != kOpen) continue;
@@ -191,37 +249,19 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
       if (keep_core(begin, box)) continue;
       const int end = pool;
       pool = begin;  // seen, dropped ...
-      // A core far larger than pipes side by side can be (the floor) is not split: its pieces are floor.
       const float core_area = float(end - begin) * cell_area;
-      if (valley_turn <= 0 || core_area < area_min || core_area > split_area_max ||
-          end + (end - begin) > pool_capacity)
+      if (core_area < area_min) continue;
+      if (core_area > split_area_max) {
+        // ... unless, the floor, pipes' tops stand on it.
+        const auto plane = fitted_plane(begin, end);
+        stats.raised_cores += split_core(begin, end, [&](int ci, int cj) {
+          return zb.z.at(ci, cj) - plane(ci, cj) > rise_min && !(valley_turn > 0 && in_valley(ci, cj));
+        });
         continue;
+      }
       // ... unless, too long, it falls apart along valleys into pieces that are cores.
-      for (int k = begin; k < end; ++k) {
-        const int ci = column_of(rb->queue[k]), cj = row_of(rb->queue[k]);
-        if (!in_valley(ci, cj)) open.at(ci, cj) = kSplit;
-      }
-      // The pieces are labelled after the whole core, which is read to its end for their seeds.
-      pool = end;
-      const int first_piece = n_cores;
-      for (int k = begin; k < end; ++k) {
-        const int ci = column_of(rb->queue[k]), cj = row_of(rb->queue[k]);
-        if (open.at(ci, cj) != kSplit) continue;
-        const int piece = pool;
-        if (!keep_core(piece, label(ci, cj, kSplit))) pool = piece;
-      }
-      // Then the pieces kept move down to where the whole core was (no overlap: they hold a
-      // subset of its cells and lie after it).
-      int write = begin;
-      for (int c = first_piece; c < n_cores; ++c) {
-        Core& kept = cores[c];
-        std::copy(&rb->queue[kept.begin], &rb->queue[kept.end], &rb->queue[write]);
-        std::copy(&rb->core_cells[kept.begin], &rb->core_cells[kept.end], &rb->core_cells[write]);
-        kept.end = write + (kept.end - kept.begin), kept.begin = write, kept.split = true;
-        write = kept.end;
-        ++stats.split_cores;
-      }
-      pool = write;
+      if (valley_turn > 0)
+        stats.split_cores += split_core(begin, end, [&](int ci, int cj) { return !in_valley(ci, cj); });
     }
   }
   stats.cores_kept = n_cores;

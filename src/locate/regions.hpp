@@ -40,6 +40,7 @@ struct RegionStats {
   int candidates = 0;    // grown regions longer than a * L
   int claimed = 0;       // cores lying mostly in an earlier candidate region: one pipe, not grown again
   int split_cores = 0;   // cores kept from too long ones split along valleys (touching pipes)
+  int raised_cores = 0;  // cores kept from one too large (the floor) by standing clear above it
   int overlapping = 0;   // grown regions lying mostly in earlier candidate regions: one pipe, not tried again
   int leaked = 0;        // grown over far more than one pipe
   int not_convex = 0;    // the cells beside the core do not tilt away from it (floor between pipes)
