@@ -19,8 +19,8 @@ struct JoinEnd {
   int core, end;
 };
 // The top of a pipe resting on a surface stands at least about 0.85 D above it (where its normal
-// is within 45 degrees of up); cells higher than half of D, and than the noise, above the plane a
-// core too large to be pipes lies in are taken for pipes' tops.
+// is within 45 degrees of up): cells more than max(0.5 D, 3 sigma) above the plane a core too
+// large to be pipes lies in are taken for pipes' tops.
 constexpr float kTopRiseOfD = 0.5f;
 constexpr float kTopRiseOfSigma = 3.0f;
 const int kDi[8] = {-1, 0, 1, -1, 1, -1, 0, 1};
@@ -252,7 +252,7 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
       const float core_area = float(end - begin) * cell_area;
       if (core_area < area_min) continue;
       if (core_area > split_area_max) {
-        // ... unless, the floor, pipes' tops stand on it.
+        // ... unless, the floor, it has pipes' tops standing on it.
         const auto plane = fitted_plane(begin, end);
         stats.raised_cores += split_core(begin, end, [&](int ci, int cj) {
           return zb.z.at(ci, cj) - plane(ci, cj) > rise_min && !(valley_turn > 0 && in_valley(ci, cj));
