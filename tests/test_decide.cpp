@@ -101,7 +101,11 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
       {"a short pipe's ridge", after_ridge(5, 25), false, CandidateOutcome::budget, false, false, 0},
       {"too few for a short pipe", after_ridge(4, 25), true, CandidateOutcome::few_ridge_points, false, false,
        0},
-      {"residual above R_th", after_fits(7.1f), true, CandidateOutcome::residual_too_high, false, false, 0},
+      // Above R_th but within residual_rescue_of_rth (1.5) of it: judged by the image instead.
+      {"residual above R_th, within the rescue", after_fits(10.4f), false, CandidateOutcome::budget, false,
+       false, 0},
+      {"residual above the rescue", after_fits(10.6f), true, CandidateOutcome::residual_too_high, false, false,
+       0},
       {"agreement under 0.7", judged(seen(690, 0, 0)), true, CandidateOutcome::not_confirmed, false, false,
        0},
       {"free space over 0.05", judged(seen(900, 51, 0)), true, CandidateOutcome::not_confirmed, false, false,
@@ -178,8 +182,10 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
 // The checks follow the config's thresholds, not fixed numbers.
 TEST(Decide, ThresholdsComeFromTheConfig) {
   LocateConfig cfg;
-  cfg.residual_max_of_d = 0.5;  // R_th = 10 mm
-  EXPECT_FALSE(decide(after_fits(9), cfg).decided);
+  cfg.residual_max_of_d = 0.5;  // R_th = 10 mm, 15 mm with the rescue
+  EXPECT_FALSE(decide(after_fits(14), cfg).decided);
+  cfg.residual_rescue_of_rth = 1;  // the paper's hard cut
+  EXPECT_TRUE(decide(after_fits(10.5f), cfg).decided);
   cfg.verify_min_agreement = 0.6;
   EXPECT_EQ(decide(judged(seen(650, 0, 0)), cfg).outcome, CandidateOutcome::accepted);
   cfg.verify_max_occluded = 0.3;

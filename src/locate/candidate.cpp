@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace pipeloc {
 namespace {
@@ -71,7 +72,7 @@ constexpr Check kChecks[] = {
      }},
     {CandidateStage::ridge_fits, CandidateOutcome::residual_too_high,
      [](const Evidence& e, const LocateConfig& cfg) {
-       return e.least_ridge_cost_mm <= residual_max_mm(cfg, e.tube_d_mm);
+       return e.least_ridge_cost_mm <= residual_rescue_mm(cfg, e.tube_d_mm);
      }},
     {CandidateStage::hypotheses, CandidateOutcome::not_confirmed,
      [](const Evidence& e, const LocateConfig& cfg) {
@@ -303,7 +304,10 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
   // pipes fit in more than one way). The best few distinct states under R_th are refined on the
   // whole region, point to plane, and the depth image judges them (no floating, no sinking, no
   // upside-down pipe). A runner-up the image confirms about as well makes the pipe ambiguous.
-  const float r_th = residual_max_mm(cfg, lm.tube_d_mm);
+  float least_cost_mm = std::numeric_limits<float>::infinity();
+  for (const RidgeFit& f : fits) least_cost_mm = std::min(least_cost_mm, f.cost_mm);
+  const float r_th = least_cost_mm <= residual_max_mm(cfg, lm.tube_d_mm) ? residual_max_mm(cfg, lm.tube_d_mm)
+                                                                        : residual_rescue_mm(cfg, lm.tube_d_mm);
   const float ambiguity_mm = float(cfg.ambiguity_pose_mm);
   PipeEstimate &best = out.best, &second = out.second;
   bool &have_best = out.have_best, &have_second = out.have_second;

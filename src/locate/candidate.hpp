@@ -106,6 +106,11 @@ Decision decide(const Evidence& evidence, const LocateConfig& cfg);
 inline float residual_max_mm(const LocateConfig& cfg, float tube_d_mm) {
   return std::max(float(cfg.residual_max_of_d) * tube_d_mm, float(cfg.residual_noise_floor_mm));
 }
+// Beyond the paper: where no fit of a region is under R_th, the best under this are judged by the
+// image instead (right fits of short or thin pipes lie just above R_th; the image decides).
+inline float residual_rescue_mm(const LocateConfig& cfg, float tube_d_mm) {
+  return float(std::max(1.0, cfg.residual_rescue_of_rth)) * residual_max_mm(cfg, tube_d_mm);
+}
 // The free-space band of verify_pose() in pixels at the distance of the model's centroid.
 inline int free_space_band_px(const LocateConfig& cfg, const LocatorModel& lm, const Intrinsics& k,
                               const Pose& model_to_cam) {

@@ -78,6 +78,8 @@ struct LocateConfig {
   int icp_fine_iterations = 8;     // the last this many on ridge_cell_mm, the others on the probe cells
   double icp_converged_mm = 0.05;
   double residual_max_of_d = 0.35;  // R_th = this * D (mean ridge distance; verification follows)
+  double residual_rescue_of_rth = 1.5;  // where no fit is under R_th, fits under this * R_th are
+                                        // judged by the image instead (1: off, the paper's cut)
   double residual_noise_floor_mm = 0;  // R_th is at least this (set per frame by raise_to_noise, not a key)
   double frame_sigma_mm = 0;           // the frame's measured depth noise (set per frame, not a key)
 
@@ -118,8 +120,9 @@ struct LocateConfig {
 };
 
 // The paper's search (IV-B): its six turns in both directions at the measured centre, every one
-// run to convergence, no turns about the vertical, no sliding, no slid rivals. The checks after
-// the search (refinement, verification, ambiguity) stay. `--search paper` / [locate] search.
+// run to convergence, no turns about the vertical, no sliding, no slid rivals, R_th a hard cut.
+// The checks after the search (refinement, verification, ambiguity) stay. `--search paper` /
+// [locate] search.
 inline void use_paper_search(LocateConfig* c) {
   c->initial_rotations = 6;
   c->initial_yaw_step_deg = 180;
@@ -127,6 +130,7 @@ inline void use_paper_search(LocateConfig* c) {
   c->icp_probed_states = 2 * c->initial_rotations;
   c->icp_continued_states = 2 * c->initial_rotations;
   c->judge_slides = false;
+  c->residual_rescue_of_rth = 1;
 }
 
 }  // namespace pipeloc
