@@ -301,9 +301,10 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
     buf->region_pts[std::size_t(refine_count++)] = buf->region_pts[std::size_t(k)];
 
   // Beyond the paper: the least ridge residual is not always the right state (ridges of curved
-  // pipes fit in more than one way). The best few distinct states under R_th are refined on the
-  // whole region, point to plane, and the depth image judges them (no floating, no sinking, no
-  // upside-down pipe). A runner-up the image confirms about as well makes the pipe ambiguous.
+  // pipes fit in more than one way). The best few distinct states under R_th (where none is, under
+  // residual_rescue_of_rth x R_th) are refined on the whole region, point to plane, and the depth
+  // image judges them (no floating, no sinking, no upside-down pipe). A runner-up the image
+  // confirms about as well makes the pipe ambiguous.
   float least_cost_mm = std::numeric_limits<float>::infinity();
   for (const RidgeFit& f : fits) least_cost_mm = std::min(least_cost_mm, f.cost_mm);
   const float r_th = least_cost_mm <= residual_max_mm(cfg, lm.tube_d_mm) ? residual_max_mm(cfg, lm.tube_d_mm)
