@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 
 namespace pipeloc {
 namespace {
@@ -72,7 +71,7 @@ constexpr Check kChecks[] = {
      }},
     {CandidateStage::ridge_fits, CandidateOutcome::residual_too_high,
      [](const Evidence& e, const LocateConfig& cfg) {
-       return e.least_ridge_cost_mm <= residual_rescue_mm(cfg, e.tube_d_mm);
+       return e.least_ridge_cost_mm <= pursued_residual_mm(cfg, e.tube_d_mm, e.least_ridge_cost_mm);
      }},
     {CandidateStage::hypotheses, CandidateOutcome::not_confirmed,
      [](const Evidence& e, const LocateConfig& cfg) {
@@ -288,7 +287,8 @@ bool reads_ends(const CandidateContext& ctx) {
 }  // namespace
 
 Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& in,
-                            const ObservedRidge& observed, const Deadline& deadline, CandidateBuffers* buf) {
+                            const ObservedRidge& observed, const RidgeFits& fitted, const Deadline& deadline,
+                            CandidateBuffers* buf) {
   const LocateConfig& cfg = ctx.cfg;
   const LocatorModel& lm = ctx.lm;
   const std::vector<RidgeFit>& fits = buf->fits;
@@ -305,10 +305,7 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
   // residual_rescue_of_rth x R_th) are refined on the whole region, point to plane, and the depth
   // image judges them (no floating, no sinking, no upside-down pipe). A runner-up the image
   // confirms about as well makes the pipe ambiguous.
-  float least_cost_mm = std::numeric_limits<float>::infinity();
-  for (const RidgeFit& f : fits) least_cost_mm = std::min(least_cost_mm, f.cost_mm);
-  const float r_th = least_cost_mm <= residual_max_mm(cfg, lm.tube_d_mm) ? residual_max_mm(cfg, lm.tube_d_mm)
-                                                                        : residual_rescue_mm(cfg, lm.tube_d_mm);
+  const float r_th = pursued_residual_mm(cfg, lm.tube_d_mm, fitted.least_cost_mm);
   const float ambiguity_mm = float(cfg.ambiguity_pose_mm);
   PipeEstimate &best = out.best, &second = out.second;
   bool &have_best = out.have_best, &have_second = out.have_second;
@@ -474,7 +471,7 @@ bool work_candidate(const CandidateContext& ctx, const CandidateInput& in, const
   evidence.least_ridge_cost_mm = fits.least_cost_mm;
   if (settled()) return false;
 
-  const Hypotheses judged = judge_hypotheses(ctx, in, observed, deadline, buf);
+  const Hypotheses judged = judge_hypotheses(ctx, in, observed, fits, deadline, buf);
   if (!judged.complete) return false;
   trace->check = judged.best.check;
   trace->refined_to_cam = judged.best.model_to_cam;

@@ -106,10 +106,12 @@ Decision decide(const Evidence& evidence, const LocateConfig& cfg);
 inline float residual_max_mm(const LocateConfig& cfg, float tube_d_mm) {
   return std::max(float(cfg.residual_max_of_d) * tube_d_mm, float(cfg.residual_noise_floor_mm));
 }
-// Beyond the paper: where no fit of a region is under R_th, the best under this are judged by the
-// image instead (right fits of short or thin pipes lie just above R_th; the image decides).
-inline float residual_rescue_mm(const LocateConfig& cfg, float tube_d_mm) {
-  return float(std::max(1.0, cfg.residual_rescue_of_rth)) * residual_max_mm(cfg, tube_d_mm);
+// The residual up to which a region's ridge fits are pursued: R_th, or beyond the paper, where no
+// fit of the region is under R_th, residual_rescue_of_rth x R_th (right fits of short or thin
+// pipes lie just above R_th; the image judges them instead).
+inline float pursued_residual_mm(const LocateConfig& cfg, float tube_d_mm, float least_cost_mm) {
+  const float r_th = residual_max_mm(cfg, tube_d_mm);
+  return least_cost_mm <= r_th ? r_th : float(std::max(1.0, cfg.residual_rescue_of_rth)) * r_th;
 }
 // The free-space band of verify_pose() in pixels at the distance of the model's centroid.
 inline int free_space_band_px(const LocateConfig& cfg, const LocatorModel& lm, const Intrinsics& k,
@@ -209,7 +211,8 @@ struct Hypotheses {
   bool have_best = false, have_second = false;
 };
 Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& in,
-                            const ObservedRidge& observed, const Deadline& deadline, CandidateBuffers* buf);
+                            const ObservedRidge& observed, const RidgeFits& fitted, const Deadline& deadline,
+                            CandidateBuffers* buf);
 
 // The stages in order, the deadline checked between them, decide() after each. Fills the trace;
 // returns true with the estimate when the candidate is accepted.
