@@ -48,6 +48,13 @@ Evidence ends_read(Evidence e, int best_pinned, int best_continued, int second_p
   return e;
 }
 
+// The pixels where the best's and the rival's renders differ: `for_best` show the best, `for_rival`
+// the rival.
+Evidence told(Evidence e, int for_best, int for_rival) {
+  e.told.for_a = for_best, e.told.for_b = for_rival;
+  return e;
+}
+
 Evidence after_ridge(int ridge_points, float extent_l_mm = kL) {
   Evidence e;
   e.tube_d_mm = kD;
@@ -154,6 +161,16 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
        true, CandidateOutcome::accepted, false, true, 0.9f},
       {"twin as good, no end seen", ends_read(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), 0, 0, 0, 0),
        true, CandidateOutcome::accepted, true, false, 0.45f},
+      // Where the two differ, the image shows the best and hardly the rival: not ambiguous.
+      {"twin as good, the pixels telling them apart show the best",
+       told(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), kMinTellingPx, kMinTellingPx / kTellingRatio),
+       true, CandidateOutcome::accepted, false, true, 0.9f},
+      {"twin as good, too few pixels tell them apart",
+       told(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), kMinTellingPx - 1, 0), true,
+       CandidateOutcome::accepted, true, false, 0.45f},
+      {"twin as good, the pixels telling them apart show both",
+       told(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), 100, 100 / kTellingRatio + 1), true,
+       CandidateOutcome::accepted, true, false, 0.45f},
       {"rival clearly worse", judged_with_rival(seen(900, 0, 0), seen(840, 0, 0)), true,
        CandidateOutcome::accepted, false, true, 0.9f},
       // A pipe that slides along itself (an arc, a coil, a straight run) is placed by its ends.
@@ -193,6 +210,10 @@ TEST(Decide, ThresholdsComeFromTheConfig) {
   EXPECT_FALSE(decide(judged(outside_view(seen(1000, 0, 0), 0.35f)), cfg).pickable);
   cfg.verify_max_outside_view = 0.4;
   EXPECT_TRUE(decide(judged(outside_view(seen(1000, 0, 0), 0.35f)), cfg).pickable);
+  const Evidence told_apart = told(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), 100, 0);
+  EXPECT_FALSE(decide(told_apart, cfg).ambiguous);
+  cfg.tell_rivals_apart = false;
+  EXPECT_TRUE(decide(told_apart, cfg).ambiguous);
   cfg.ambiguity_quality_margin = 0.01;
   EXPECT_FALSE(decide(judged_with_rival(seen(900, 0, 0), seen(860, 0, 0)), cfg).ambiguous);
 }

@@ -225,6 +225,52 @@ TEST(BinAwareVerification, AnArcIsPlacedAlongItselfOnlyByAnEndTheImageShows) {
 
 // On a simulated bin (floor at z = 0) the floor is found, a pipe's pose lies on it, and the same
 // pose four diameters lower lies under it.
+// A bend with legs of 85 and 104 mm and its near twin (turned end for end: its legs swapped).
+// Where the image shows the pipe's ends, the pixels where the two renders differ speak for the
+// pipe, hardly for the twin; where the sensor has no reading there, nothing tells them apart.
+TEST(BinAwareVerification, ANearTwinIsToldApartByThePixelsWhereTheyDiffer) {
+  const PipeModel model = pipe_of("S85,B-134r188,S104", 23.3, "bend");
+  ASSERT_EQ(model.near_symmetries.size(), 1u);
+  const Mesh mesh = weld_vertices(model.mesh, model.tube_diameter_mm / 8);
+  Intrinsics k;
+  k.width = 640, k.height = 480, k.fx = k.fy = 570, k.cx = 320, k.cy = 240;
+  Pose pipe = Pose::Identity();
+  pipe.linear() = Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  pipe.translation() = Eigen::Vector3d(0, 0, 950);
+  const Pose twin = pipe * model.near_symmetries[0];
+  ProjectedMesh projected;
+  projected.reserve(mesh);
+  Image<float> at_pipe(k.width, k.height, 0.0f), at_twin(k.width, k.height, 0.0f);
+  const PixelBox box_pipe = render_depth_in_box(mesh, pipe, k, &at_pipe, &projected);
+  const PixelBox box_twin = render_depth_in_box(mesh, twin, k, &at_twin, &projected);
+  // The sensor: the pipe on a floor 1 m away, 1 mm of noise.
+  Image<float> depth(k.width, k.height, 1000.0f);
+  std::mt19937 rng(3);
+  std::normal_distribution<float> noise(0.0f, 1.0f);
+  for (int y = 0; y < k.height; ++y)
+    for (int x = 0; x < k.width; ++x) {
+      const bool on_pipe = x >= box_pipe.x0 && x <= box_pipe.x1 && y >= box_pipe.y0 && y <= box_pipe.y1 &&
+                           at_pipe.at(x, y) > 0;
+      depth.at(x, y) = (on_pipe ? at_pipe.at(x, y) : 1000.0f) + noise(rng);
+    }
+  const float tol = 5;
+  const TellingPixels seen = tell_apart(at_pipe, box_pipe, at_twin, box_twin, depth, tol);
+  EXPECT_GE(seen.for_a, kMinTellingPx);
+  EXPECT_LE(kTellingRatio * seen.for_b, seen.for_a) << seen.for_a << " for the pipe, " << seen.for_b << " for its twin";
+  const TellingPixels swapped = tell_apart(at_twin, box_twin, at_pipe, box_pipe, depth, tol);
+  EXPECT_EQ(swapped.for_a, seen.for_b);
+  EXPECT_EQ(swapped.for_b, seen.for_a);
+  // No reading where the two differ (a dropout, the ends under a shadow): nothing tells them apart.
+  for (int y = 0; y < k.height; ++y)
+    for (int x = 0; x < k.width; ++x) {
+      const float zp = x >= box_pipe.x0 && x <= box_pipe.x1 && y >= box_pipe.y0 && y <= box_pipe.y1 ? at_pipe.at(x, y) : 0;
+      const float zt = x >= box_twin.x0 && x <= box_twin.x1 && y >= box_twin.y0 && y <= box_twin.y1 ? at_twin.at(x, y) : 0;
+      if ((zp > 0) != (zt > 0) || std::abs(zp - zt) > tol) depth.at(x, y) = 0;
+    }
+  const TellingPixels hidden = tell_apart(at_pipe, box_pipe, at_twin, box_twin, depth, tol);
+  EXPECT_EQ(hidden.for_a + hidden.for_b, 0);
+}
+
 TEST(BinAwareVerification, NoPoseBelowTheFloor) {
   const PipeModel& model = preset_model("sbend");
   const SimulatedScene s = pile_of(model, 3, 4);

@@ -236,6 +236,7 @@ void read_locate(Section& s, LocateConfig* c) {
   s.real("verify_max_side_level", &c->verify_max_side_level, 0, 1, "share (1: off)");
   s.real("ambiguity_pose_mm", &c->ambiguity_pose_mm, 0, 1000, "mm");
   s.real("ambiguity_quality_margin", &c->ambiguity_quality_margin, 0, 1, "share");
+  s.boolean("tell_rivals_apart", &c->tell_rivals_apart);
   s.integer("verify_hypotheses", &c->verify_hypotheses, 1, 24, "fits per region");
   s.boolean("judge_slides", &c->judge_slides);
   s.boolean("pin_slides_by_ends", &c->pin_slides_by_ends);

@@ -130,9 +130,12 @@ Decision decide(const Evidence& e, const LocateConfig& cfg) {
   // ... unless the image shows the best's ends where they are and not the rival's (a near twin
   // whose telling end is in view: beyond one of its ends the tube goes on, or it is not pinned).
   const auto ends_shown = [](const Verification& v) { return v.ends_pinned - 2 * v.ends_continued; };
+  // ... or where the two differ, the image speaks for the best and hardly for the rival.
+  const bool told_apart = cfg.tell_rivals_apart && e.told.for_a >= kMinTellingPx &&
+                          kTellingRatio * e.told.for_b <= e.told.for_a;
   out.ambiguous = e.have_second &&
                   hypothesis_quality(e.second) >= hypothesis_quality(e.best) - float(cfg.ambiguity_quality_margin) &&
-                  !(e.ends_judged && ends_shown(e.best) > ends_shown(e.second));
+                  !(e.ends_judged && ends_shown(e.best) > ends_shown(e.second)) && !told_apart;
   // Beyond the paper: a pipe that slides along itself is placed along its length only by an end
   // the image shows; where none is seen, or the tube goes on beyond one, the pose may be slid.
   if (e.ends_must_pin && (e.best.ends_pinned == 0 || e.best.ends_continued > 0)) out.ambiguous = true;
@@ -165,6 +168,7 @@ void reserve_candidate(CandidateBuffers* buf, const LocatorModel& lm, const Star
   buf->fits.reserve(std::size_t(starts.size()));
   buf->starts.reserve(buf->fits.capacity());
   buf->scratch_depth.resize(camera.width, camera.height, 0.0f);
+  buf->rival_depth.resize(camera.width, camera.height, 0.0f);
   buf->scratch_mesh.reserve(lm.verify_mesh);
 }
 
@@ -435,6 +439,19 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
       judge(slid, found_cost_mm, buf->region_pts.data(), refine_count);
     }
   }
+  // Beyond the paper: where the best and a rival about as good differ (a near twin's longer leg,
+  // a slid pose's ends), which one the image shows.
+  if (cfg.tell_rivals_apart && have_best && have_second &&
+      hypothesis_quality(second.check) >= hypothesis_quality(best.check) - float(cfg.ambiguity_quality_margin)) {
+    const auto t0 = Clock::now();
+    const PixelBox box_best = render_depth_in_box(lm.verify_mesh, best.model_to_cam, ctx.camera,
+                                                  &buf->scratch_depth, &buf->scratch_mesh, lm.verify_winding);
+    const PixelBox box_second = render_depth_in_box(lm.verify_mesh, second.model_to_cam, ctx.camera,
+                                                    &buf->rival_depth, &buf->scratch_mesh, lm.verify_winding);
+    out.told = tell_apart(buf->scratch_depth, box_best, buf->rival_depth, box_second, ctx.depth,
+                          float(cfg.verify_tolerance_mm));
+    buf->times.verify_ms += ms_since(t0);
+  }
   out.complete = true;
   return out;
 }
@@ -478,6 +495,7 @@ bool work_candidate(const CandidateContext& ctx, const CandidateInput& in, const
   evidence.reached = CandidateStage::hypotheses;
   evidence.have_best = judged.have_best, evidence.have_second = judged.have_second;
   evidence.best = judged.best.check, evidence.second = judged.second.check;
+  evidence.told = judged.told;
   const Decision decision = decide(evidence, ctx.cfg);
   trace->outcome = decision.outcome;
   if (decision.outcome != CandidateOutcome::accepted) return false;

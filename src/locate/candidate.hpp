@@ -37,6 +37,10 @@ inline int min_ridge_points(const LocateConfig& cfg, float extent_l_mm) {
 constexpr float kFreeSpaceWeight = 2.0f;
 // An ambiguous estimate keeps half its score: it ranks below a sure one of about the same cover.
 constexpr float kAmbiguousScoreFactor = 0.5f;
+// A rival is told apart where at least kMinTellingPx pixels speak for the best and at most
+// 1 / kTellingRatio of that for the rival (tell_apart).
+constexpr int kMinTellingPx = 20;
+constexpr int kTellingRatio = 4;
 
 struct PipeEstimate {
   Pose model_to_bin = Pose::Identity();
@@ -86,6 +90,7 @@ struct Evidence {
   float least_ridge_cost_mm = 1e30f;              // ridge_fits: least residual of the states continued
   bool have_best = false, have_second = false;    // hypotheses: the best judged, and a rival
   Verification best, second;                      // ... more than ambiguity_pose_mm from it
+  TellingPixels told;                             // ... the pixels where the image tells them apart
 };
 
 struct Decision {
@@ -164,6 +169,7 @@ struct CandidateBuffers {
   std::vector<RidgeFit> fits;
   std::vector<SlidStart> starts;
   Image<float> scratch_depth;
+  Image<float> rival_depth;  // the rival's render, beside the best's, to tell them apart
   ProjectedMesh scratch_mesh;
   CandidateTimes times;
 };
@@ -209,6 +215,7 @@ struct Hypotheses {
   bool complete = false;  // false: the deadline passed first
   PipeEstimate best, second;
   bool have_best = false, have_second = false;
+  TellingPixels told;  // for_a: pixels for the best, for_b: for the second
 };
 Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& in,
                             const ObservedRidge& observed, const RidgeFits& fitted, const Deadline& deadline,

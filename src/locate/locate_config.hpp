@@ -104,6 +104,8 @@ struct LocateConfig {
   int verify_hypotheses = 3;               // distinct ridge fits refined and checked per region
   double ambiguity_pose_mm = 10;           // two fits further apart than this (MSSD) ...
   double ambiguity_quality_margin = 0.05;  // ... both confirmed within this margin: ambiguous
+  bool tell_rivals_apart = true;  // ... unless, where the two differ, the image speaks for the best
+                                  // (at least 20 pixels) and at most a quarter as much for the rival
   bool judge_slides = true;  // the found pose slid along the pipe itself (an arc about its centre,
                              // a coil along its helix, a straight run along its axis) is a rival too
   bool pin_slides_by_ends = true;  // a pipe that slides along itself is pickable only where the

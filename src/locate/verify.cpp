@@ -114,6 +114,35 @@ void judge_ends(const std::vector<Eigen::Vector3f>& centreline, float d, const P
   }
 }
 
+TellingPixels tell_apart(const Image<float>& a_mm, const PixelBox& box_a, const Image<float>& b_mm,
+                         const PixelBox& box_b, const Image<float>& depth, float tol) {
+  TellingPixels out;
+  const auto drawn = [](const Image<float>& r, const PixelBox& box, int x, int y) {
+    return x >= box.x0 && x <= box.x1 && y >= box.y0 && y <= box.y1 && r.at(x, y) > 0 ? r.at(x, y) : 0.f;
+  };
+  const auto on_rim = [&](const Image<float>& r, const PixelBox& box, int x, int y) {
+    return !(drawn(r, box, x - 1, y) > 0 && drawn(r, box, x + 1, y) > 0 && drawn(r, box, x, y - 1) > 0 &&
+             drawn(r, box, x, y + 1) > 0);
+  };
+  // +1: the sensor measured this render's surface; -1: it saw through it; 0: not drawn, or in front.
+  const auto says = [&](float zm, float zo) { return zm <= 0 ? 0 : std::abs(zo - zm) <= tol ? 1 : zo > zm + tol ? -1 : 0; };
+  const int x0 = std::min(box_a.x0, box_b.x0), y0 = std::min(box_a.y0, box_b.y0);
+  const int x1 = std::max(box_a.x1, box_b.x1), y1 = std::max(box_a.y1, box_b.y1);
+  for (int y = y0; y <= y1; ++y)
+    for (int x = x0; x <= x1; ++x) {
+      const float za = drawn(a_mm, box_a, x, y), zb = drawn(b_mm, box_b, x, y);
+      if (za <= 0 && zb <= 0) continue;
+      if (za > 0 && zb > 0 && std::abs(za - zb) <= tol) continue;  // both say the same
+      if ((za > 0 && on_rim(a_mm, box_a, x, y)) || (zb > 0 && on_rim(b_mm, box_b, x, y))) continue;
+      const float zo = depth.at(x, y);
+      if (!(zo > 0)) continue;
+      const int sa = says(za, zo), sb = says(zb, zo);
+      out.for_a += sa > sb;
+      out.for_b += sb > sa;
+    }
+  return out;
+}
+
 float lowest_surface_z(const ZBuffer& zb, float share, std::vector<int>* histogram) {
   float lo = INFINITY, hi = -INFINITY;
   int valid = 0;

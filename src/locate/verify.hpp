@@ -66,6 +66,16 @@ Verification verify_pose(const Mesh& mesh, Winding winding, const Pose& model_to
 // ends_continued of *v.
 void judge_ends(const std::vector<Eigen::Vector3f>& centreline, float d_mm, const Pose& model_to_cam,
                 const Image<float>& depth_mm, const Intrinsics& k, float tolerance_mm, Verification* v);
+// Beyond the paper: two poses told apart by the image. Where their renders (depth in each box,
+// 0 where not drawn) differ by more than tolerance_mm, each pixel speaks for the pose whose
+// surface the sensor measured there, or against one it saw through; rims are left out (lateral
+// noise), so are pixels without a reading or with something in front of both.
+struct TellingPixels {
+  int for_a = 0, for_b = 0;
+};
+TellingPixels tell_apart(const Image<float>& a_mm, const PixelBox& box_a, const Image<float>& b_mm,
+                         const PixelBox& box_b, const Image<float>& depth_mm, float tolerance_mm);
+
 // Beyond the paper: the bin. The lowest surface the frame shows (the floor where it is seen, else
 // the lowest pipes), as the height under which `share` of the Z-buffer's valid cells lie;
 // histogram: working memory (1 mm bins). NaN when the buffer is empty.
