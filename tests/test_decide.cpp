@@ -163,13 +163,22 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
        true, CandidateOutcome::accepted, true, false, 0.45f},
       // Where the two differ, the image shows the best and hardly the rival: not ambiguous.
       {"twin as good, the pixels telling them apart show the best",
-       told(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), kMinTellingPx, kMinTellingPx / kTellingRatio),
+       told(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), kMinTellingPx,
+            kMinTellingPx / kTellingRatio),
        true, CandidateOutcome::accepted, false, true, 0.9f},
       {"twin as good, too few pixels tell them apart",
        told(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), kMinTellingPx - 1, 0), true,
        CandidateOutcome::accepted, true, false, 0.45f},
       {"twin as good, the pixels telling them apart show both",
        told(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), 100, 100 / kTellingRatio + 1), true,
+       CandidateOutcome::accepted, true, false, 0.45f},
+      // The twin's end reads as going on, but where the two differ the pixels speak for the twin
+      // half as much as for the best: another pipe may touch the right pose's end. Ambiguous.
+      {"twin's end goes on, one end each pinned",
+       ends_read(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), 1, 0, 1, 1), true,
+       CandidateOutcome::accepted, false, true, 0.9f},
+      {"twin's end goes on, the pixels speak for it too",
+       told(ends_read(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), 1, 0, 1, 1), 28, 18), true,
        CandidateOutcome::accepted, true, false, 0.45f},
       {"rival clearly worse", judged_with_rival(seen(900, 0, 0), seen(840, 0, 0)), true,
        CandidateOutcome::accepted, false, true, 0.9f},

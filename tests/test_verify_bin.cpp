@@ -256,15 +256,18 @@ TEST(BinAwareVerification, ANearTwinIsToldApartByThePixelsWhereTheyDiffer) {
   const float tol = 5;
   const TellingPixels seen = tell_apart(at_pipe, box_pipe, at_twin, box_twin, depth, tol);
   EXPECT_GE(seen.for_a, kMinTellingPx);
-  EXPECT_LE(kTellingRatio * seen.for_b, seen.for_a) << seen.for_a << " for the pipe, " << seen.for_b << " for its twin";
+  EXPECT_LE(kTellingRatio * seen.for_b, seen.for_a)
+      << seen.for_a << " for the pipe, " << seen.for_b << " for its twin";
   const TellingPixels swapped = tell_apart(at_twin, box_twin, at_pipe, box_pipe, depth, tol);
   EXPECT_EQ(swapped.for_a, seen.for_b);
   EXPECT_EQ(swapped.for_b, seen.for_a);
   // No reading where the two differ (a dropout, the ends under a shadow): nothing tells them apart.
   for (int y = 0; y < k.height; ++y)
     for (int x = 0; x < k.width; ++x) {
-      const float zp = x >= box_pipe.x0 && x <= box_pipe.x1 && y >= box_pipe.y0 && y <= box_pipe.y1 ? at_pipe.at(x, y) : 0;
-      const float zt = x >= box_twin.x0 && x <= box_twin.x1 && y >= box_twin.y0 && y <= box_twin.y1 ? at_twin.at(x, y) : 0;
+      const float zp =
+          x >= box_pipe.x0 && x <= box_pipe.x1 && y >= box_pipe.y0 && y <= box_pipe.y1 ? at_pipe.at(x, y) : 0;
+      const float zt =
+          x >= box_twin.x0 && x <= box_twin.x1 && y >= box_twin.y0 && y <= box_twin.y1 ? at_twin.at(x, y) : 0;
       if ((zp > 0) != (zt > 0) || std::abs(zp - zt) > tol) depth.at(x, y) = 0;
     }
   const TellingPixels hidden = tell_apart(at_pipe, box_pipe, at_twin, box_twin, depth, tol);

@@ -131,11 +131,18 @@ Decision decide(const Evidence& e, const LocateConfig& cfg) {
   // whose telling end is in view: beyond one of its ends the tube goes on, or it is not pinned).
   const auto ends_shown = [](const Verification& v) { return v.ends_pinned - 2 * v.ends_continued; };
   // ... or where the two differ, the image speaks for the best and hardly for the rival.
-  const bool told_apart = cfg.tell_rivals_apart && e.told.for_a >= kMinTellingPx &&
-                          kTellingRatio * e.told.for_b <= e.told.for_a;
-  out.ambiguous = e.have_second &&
-                  hypothesis_quality(e.second) >= hypothesis_quality(e.best) - float(cfg.ambiguity_quality_margin) &&
-                  !(e.ends_judged && ends_shown(e.best) > ends_shown(e.second)) && !told_apart;
+  const bool told_apart =
+      cfg.tell_rivals_apart && e.told.for_a >= kMinTellingPx && kTellingRatio * e.told.for_b <= e.told.for_a;
+  // A rival's end that goes on counts against it only where the pixels telling the two apart do
+  // not speak for it half as much as for the best: another pipe touching the right pose's end
+  // reads as its tube going on.
+  const bool pixels_for_rival =
+      cfg.tell_rivals_apart && 2 * e.told.for_b >= kMinTellingPx && 2 * e.told.for_b > e.told.for_a;
+  const int rival_ends_shown = pixels_for_rival ? e.second.ends_pinned : ends_shown(e.second);
+  out.ambiguous =
+      e.have_second &&
+      hypothesis_quality(e.second) >= hypothesis_quality(e.best) - float(cfg.ambiguity_quality_margin) &&
+      !(e.ends_judged && ends_shown(e.best) > rival_ends_shown) && !told_apart;
   // Beyond the paper: a pipe that slides along itself is placed along its length only by an end
   // the image shows; where none is seen, or the tube goes on beyond one, the pose may be slid.
   if (e.ends_must_pin && (e.best.ends_pinned == 0 || e.best.ends_continued > 0)) out.ambiguous = true;
@@ -442,7 +449,8 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
   // Beyond the paper: where the best and a rival about as good differ (a near twin's longer leg,
   // a slid pose's ends), which one the image shows.
   if (cfg.tell_rivals_apart && have_best && have_second &&
-      hypothesis_quality(second.check) >= hypothesis_quality(best.check) - float(cfg.ambiguity_quality_margin)) {
+      hypothesis_quality(second.check) >=
+          hypothesis_quality(best.check) - float(cfg.ambiguity_quality_margin)) {
     const auto t0 = Clock::now();
     const PixelBox box_best = render_depth_in_box(lm.verify_mesh, best.model_to_cam, ctx.camera,
                                                   &buf->scratch_depth, &buf->scratch_mesh, lm.verify_winding);

@@ -125,7 +125,9 @@ TellingPixels tell_apart(const Image<float>& a_mm, const PixelBox& box_a, const 
              drawn(r, box, x, y + 1) > 0);
   };
   // +1: the sensor measured this render's surface; -1: it saw through it; 0: not drawn, or in front.
-  const auto says = [&](float zm, float zo) { return zm <= 0 ? 0 : std::abs(zo - zm) <= tol ? 1 : zo > zm + tol ? -1 : 0; };
+  const auto says = [&](float zm, float zo) {
+    return zm <= 0 ? 0 : std::abs(zo - zm) <= tol ? 1 : zo > zm + tol ? -1 : 0;
+  };
   const int x0 = std::min(box_a.x0, box_b.x0), y0 = std::min(box_a.y0, box_b.y0);
   const int x1 = std::max(box_a.x1, box_b.x1), y1 = std::max(box_a.y1, box_b.y1);
   for (int y = y0; y <= y1; ++y)
