@@ -145,8 +145,20 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
        CandidateOutcome::accepted, false, true, 0.9f},
       {"a fifth out of the view, too little confirmed", judged(outside_view(seen(800, 0, 0), 0.2f)), true,
        CandidateOutcome::accepted, false, false, 0.8f},
-      {"a third out of the view", judged(outside_view(seen(1000, 0, 0), 0.35f)), true,
+      {"a third out of the view", judged(outside_view(seen(850, 0, 0), 0.35f)), true,
+       CandidateOutcome::accepted, false, false, 0.85f},
+      // Up to half out of the view where what is in view agrees 0.9, and for a pipe its ends
+      // place (near twins, slides), an end is pinned.
+      {"a third out of the view, what is in view well seen", judged(outside_view(seen(950, 0, 0), 0.35f)),
+       true, CandidateOutcome::accepted, false, true, 0.95f},
+      {"six tenths out of the view", judged(outside_view(seen(1000, 0, 0), 0.6f)), true,
        CandidateOutcome::accepted, false, false, 1.0f},
+      {"a third out of the view, ends read, none pinned",
+       ends_read(judged(outside_view(seen(950, 0, 0), 0.35f)), 0, 0, 0, 0), true, CandidateOutcome::accepted,
+       false, false, 0.95f},
+      {"a third out of the view, ends read, one pinned",
+       ends_read(judged(outside_view(seen(950, 0, 0), 0.35f)), 1, 0, 0, 0), true, CandidateOutcome::accepted,
+       false, true, 0.95f},
       {"a tenth under a pipe, a tenth out of the view", judged(outside_view(seen(900, 0, 100), 0.1f)), true,
        CandidateOutcome::accepted, false, true, 0.81f},
       {"a twentieth out of the view", judged(outside_view(seen(900, 0, 0), 0.05f)), true,
@@ -216,6 +228,10 @@ TEST(Decide, ThresholdsComeFromTheConfig) {
   EXPECT_EQ(decide(judged(seen(650, 0, 0)), cfg).outcome, CandidateOutcome::accepted);
   cfg.verify_max_occluded = 0.3;
   EXPECT_TRUE(decide(judged(seen(800, 0, 200)), cfg).pickable);
+  EXPECT_TRUE(decide(judged(outside_view(seen(950, 0, 0), 0.45f)), cfg).pickable);  // well seen
+  cfg.verify_max_outside_view_well_seen = 0.4;
+  EXPECT_FALSE(decide(judged(outside_view(seen(950, 0, 0), 0.45f)), cfg).pickable);
+  cfg.verify_max_outside_view_well_seen = 0;  // off: the first rule alone
   EXPECT_FALSE(decide(judged(outside_view(seen(1000, 0, 0), 0.35f)), cfg).pickable);
   cfg.verify_max_outside_view = 0.4;
   EXPECT_TRUE(decide(judged(outside_view(seen(1000, 0, 0), 0.35f)), cfg).pickable);

@@ -232,6 +232,8 @@ void read_locate(Section& s, LocateConfig* c) {
   s.real("free_space_band_of_d", &c->free_space_band_of_d, 0, 2, "x D");
   s.real("verify_max_occluded", &c->verify_max_occluded, 0, 1, "share");
   s.real("verify_max_outside_view", &c->verify_max_outside_view, 0, 1, "share");
+  s.real("verify_max_outside_view_well_seen", &c->verify_max_outside_view_well_seen, 0, 1, "share");
+  s.real("verify_well_seen_agreement", &c->verify_well_seen_agreement, 0, 1, "share");
   s.real("side_drop_of_d", &c->side_drop_of_d, 0, 5, "x D");
   s.real("verify_max_side_level", &c->verify_max_side_level, 0, 1, "share (1: off)");
   s.real("ambiguity_pose_mm", &c->ambiguity_pose_mm, 0, 1000, "mm");

@@ -131,8 +131,8 @@ Decision decide(const Evidence& e, const LocateConfig& cfg) {
   // whose telling end is in view: beyond one of its ends the tube goes on, or it is not pinned).
   const auto ends_shown = [](const Verification& v) { return v.ends_pinned - 2 * v.ends_continued; };
   // ... or where the two differ, the image speaks for the best and hardly for the rival.
-  const bool told_apart =
-      cfg.tell_rivals_apart && e.told.for_a >= kMinTellingPx && kTellingRatio * e.told.for_b <= e.told.for_a;
+  const bool told_apart = cfg.tell_rivals_apart && !e.ends_must_pin && e.told.for_a >= kMinTellingPx &&
+                          kTellingRatio * e.told.for_b <= e.told.for_a;
   // A rival's end that goes on counts against it only where the pixels telling the two apart do
   // not speak for it half as much as for the best: another pipe touching the right pose's end
   // reads as its tube going on.
@@ -151,11 +151,17 @@ Decision decide(const Evidence& e, const LocateConfig& cfg) {
   // A pose is handed out only where the image could check it: at most verify_max_occluded of it
   // under something in front, at most verify_max_outside_view of it out of the view, and what
   // the image confirms is still verify_min_agreement of the whole pipe, the part out of the view
-  // counted as not confirmed (a pose hanging out of the view is checked on too little of it).
+  // counted as not confirmed (a pose hanging out of the view is checked on too little of it) ...
   const float confirmed_of_whole = e.best.agreement() * (1.0f - e.best.outside_view);
-  out.pickable = !out.ambiguous && e.best.occluded() <= float(cfg.verify_max_occluded) &&
-                 e.best.outside_view <= float(cfg.verify_max_outside_view) &&
-                 confirmed_of_whole >= float(cfg.verify_min_agreement);
+  // ... or, up to verify_max_outside_view_well_seen of it out of the view, the image confirms
+  // verify_well_seen_agreement of what is in view, and, for a pipe its ends place (a near twin,
+  // a slide), shows one of its ends.
+  const bool checked_in_view = (e.best.outside_view <= float(cfg.verify_max_outside_view) &&
+                                confirmed_of_whole >= float(cfg.verify_min_agreement)) ||
+                               (e.best.outside_view <= float(cfg.verify_max_outside_view_well_seen) &&
+                                e.best.agreement() >= float(cfg.verify_well_seen_agreement) &&
+                                (!e.ends_judged || e.best.ends_pinned > 0));
+  out.pickable = !out.ambiguous && e.best.occluded() <= float(cfg.verify_max_occluded) && checked_in_view;
   return out;
 }
 
