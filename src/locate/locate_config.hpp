@@ -109,6 +109,7 @@ struct LocateConfig {
   double ambiguity_quality_margin = 0.05;  // ... both confirmed within this margin: ambiguous
   bool tell_rivals_apart = true;  // ... unless, where the two differ, the image speaks for the best
                                   // (at least 20 pixels) and at most a quarter as much for the rival
+                                  // (not for a pipe that slides along itself: its ends place it)
   bool judge_slides = true;  // the found pose slid along the pipe itself (an arc about its centre,
                              // a coil along its helix, a straight run along its axis) is a rival too
   bool pin_slides_by_ends = true;  // a pipe that slides along itself is pickable only where the
