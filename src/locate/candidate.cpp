@@ -130,7 +130,8 @@ Decision decide(const Evidence& e, const LocateConfig& cfg) {
   // ... unless the image shows the best's ends where they are and not the rival's (a near twin
   // whose telling end is in view: beyond one of its ends the tube goes on, or it is not pinned).
   const auto ends_shown = [](const Verification& v) { return v.ends_pinned - 2 * v.ends_continued; };
-  // ... or where the two differ, the image speaks for the best and hardly for the rival.
+  // ... or where the two differ, the image speaks for the best and hardly for the rival (not for
+  // a pipe that slides along itself: its ends place it, below).
   const bool told_apart = cfg.tell_rivals_apart && !e.ends_must_pin && e.told.for_a >= kMinTellingPx &&
                           kTellingRatio * e.told.for_b <= e.told.for_a;
   // A rival's end that goes on counts against it only where the pixels telling the two apart do
@@ -453,7 +454,7 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
     }
   }
   // Beyond the paper: where the best and a rival about as good differ (a near twin's longer leg,
-  // a slid pose's ends), which one the image shows.
+  // a slid pose's ends), which one the image shows (decide() weighs it with the ends).
   if (cfg.tell_rivals_apart && have_best && have_second &&
       hypothesis_quality(second.check) >=
           hypothesis_quality(best.check) - float(cfg.ambiguity_quality_margin)) {
