@@ -433,10 +433,8 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
           pick_distance_mm(lm, twin, second.model_to_bin, ambiguity_mm) <= ambiguity_mm)
         continue;
       if (deadline.passed()) return out;
-      if (found_count > 0)
-        judge(twin, found_cost_mm, buf->found_pts.data(), found_count);
-      else
-        judge(twin, found_cost_mm, buf->region_pts.data(), refine_count);
+      judge(twin, found_cost_mm, found_count > 0 ? buf->found_pts.data() : buf->region_pts.data(),
+            found_count > 0 ? found_count : refine_count);
     }
     if (pick_distance_mm(lm, found, best.model_to_bin, ambiguity_mm) <= ambiguity_mm) break;  // it held
   }

@@ -12,6 +12,12 @@ constexpr int kSideStepPx = 2;
 // Where beyond a tube's end the image is read (shares of D along the centreline's direction).
 constexpr float kEndProbesOfD[] = {0.75f, 1.25f};
 
+// The depth a render drew at (x, y): its image within the box it was drawn in; 0 elsewhere.
+float drawn_mm(const Image<float>& render, const PixelBox& box, int x, int y) {
+  const bool in_box = x >= box.x0 && x <= box.x1 && y >= box.y0 && y <= box.y1;
+  return in_box && render.at(x, y) > 0 ? render.at(x, y) : 0.f;
+}
+
 }  // namespace
 
 Verification verify_pose(const Mesh& mesh, Winding winding, const Pose& model_to_cam,
@@ -26,9 +32,7 @@ Verification verify_pose(const Mesh& mesh, Winding winding, const Pose& model_to
     outside += !(projected->cam[i].z() > 0 && px.x() >= 0 && px.y() >= 0 && px.x() < k.width && px.y() < k.height);
   }
   v.outside_view = mesh.vertices.empty() ? 0.f : float(outside) / float(mesh.vertices.size());
-  const auto model_at = [&](int x, int y) {
-    return x >= box.x0 && x <= box.x1 && y >= box.y0 && y <= box.y1 && scratch->at(x, y) > 0;
-  };
+  const auto model_at = [&](int x, int y) { return drawn_mm(*scratch, box, x, y) > 0; };
   // A side pixel: beyond the rim at (x, y) in direction (dx, dy), not on the model; beyond the
   // free-space band too, so that a pose a band's width to the side does not read its own pipe.
   const int side_step = std::max(kSideStepPx, free_band_px + 1);
@@ -117,12 +121,9 @@ void judge_ends(const std::vector<Eigen::Vector3f>& centreline, float d, const P
 TellingPixels tell_apart(const Image<float>& a_mm, const PixelBox& box_a, const Image<float>& b_mm,
                          const PixelBox& box_b, const Image<float>& depth, float tol) {
   TellingPixels out;
-  const auto drawn = [](const Image<float>& r, const PixelBox& box, int x, int y) {
-    return x >= box.x0 && x <= box.x1 && y >= box.y0 && y <= box.y1 && r.at(x, y) > 0 ? r.at(x, y) : 0.f;
-  };
-  const auto on_rim = [&](const Image<float>& r, const PixelBox& box, int x, int y) {
-    return !(drawn(r, box, x - 1, y) > 0 && drawn(r, box, x + 1, y) > 0 && drawn(r, box, x, y - 1) > 0 &&
-             drawn(r, box, x, y + 1) > 0);
+  const auto on_rim = [](const Image<float>& r, const PixelBox& box, int x, int y) {
+    return !(drawn_mm(r, box, x - 1, y) > 0 && drawn_mm(r, box, x + 1, y) > 0 &&
+             drawn_mm(r, box, x, y - 1) > 0 && drawn_mm(r, box, x, y + 1) > 0);
   };
   // +1: the sensor measured this render's surface; -1: it saw through it; 0: not drawn, or in front.
   const auto says = [&](float zm, float zo) {
@@ -132,7 +133,7 @@ TellingPixels tell_apart(const Image<float>& a_mm, const PixelBox& box_a, const 
   const int x1 = std::max(box_a.x1, box_b.x1), y1 = std::max(box_a.y1, box_b.y1);
   for (int y = y0; y <= y1; ++y)
     for (int x = x0; x <= x1; ++x) {
-      const float za = drawn(a_mm, box_a, x, y), zb = drawn(b_mm, box_b, x, y);
+      const float za = drawn_mm(a_mm, box_a, x, y), zb = drawn_mm(b_mm, box_b, x, y);
       if (za <= 0 && zb <= 0) continue;
       if (za > 0 && zb > 0 && std::abs(za - zb) <= tol) continue;  // both say the same
       if ((za > 0 && on_rim(a_mm, box_a, x, y)) || (zb > 0 && on_rim(b_mm, box_b, x, y))) continue;
