@@ -4,6 +4,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
 
 #include "locate/locator.hpp"
@@ -315,6 +316,42 @@ TEST(Segmentation, AThinTubeJoinedToTheFloorGetsACoreOfItsOwn) {
   EXPECT_GT(c.core_centroid.z(), 0.85 * d);
   EXPECT_GT(c.core_centroid.x(), x0);
   EXPECT_LT(c.core_centroid.x(), x0 + length);
+}
+
+// The growth's visit marks and the regions' claims count up frame by frame; a deployed cell runs
+// for weeks, longer than an int counts. When the values run out the marks are cleared: the same
+// frame gives the same candidates as with fresh buffers.
+TEST(Segmentation, MarksThatRunOutAreClearedNotOverflowed) {
+  constexpr double d = 20, r = d / 2, length = 200;
+  const auto tube_top = [&](double y, double axis_y) {
+    const double dy = y - axis_y;
+    return std::abs(dy) <= r ? r + std::sqrt(r * r - dy * dy) : 0.0;
+  };
+  const ZBuffer zb = synthetic_zbuffer(300, [&](double x, double y) {
+    if (x < 40 || x > 40 + length) return 0.0f;
+    return float(std::max(tube_top(y, 80), tube_top(y, 200)));
+  });
+  const LocateConfig cfg;
+  NormalMap nm;
+  reserve_normals(&nm, zb);
+  compute_normals(zb, 5, 10, &nm);
+  const auto candidates = [&](int used) {
+    RegionBuffers rb;
+    reserve_regions(&rb, zb, cfg, float(d), float(length));
+    rb.stamp_value = rb.claim_value = used;
+    std::vector<std::vector<int>> out;
+    for (int frame = 0; frame < 3; ++frame) {  // the counters run out within these three
+      mark_upward_rows(zb, nm, cfg, 0, zb.height, &rb);
+      extract_candidate_regions(zb, nm, cfg, float(d), float(length), &rb);
+      for (const CandidateRegion& c : rb.candidates)
+        out.emplace_back(&rb.region_cells[std::size_t(c.cells_begin)],
+                         &rb.region_cells[std::size_t(c.cells_end)]);
+    }
+    return out;
+  };
+  const auto fresh = candidates(0);
+  ASSERT_EQ(fresh.size(), 6u);  // both tubes, three times
+  EXPECT_EQ(candidates(std::numeric_limits<int>::max() - 3), fresh);
 }
 
 }  // namespace

@@ -32,6 +32,18 @@ int pack(int i, int j) { return (j << 16) | i; }
 int column_of(int packed) { return packed & 0xffff; }
 int row_of(int packed) { return packed >> 16; }
 
+// The first of `span` mark values not yet used in `marks`. A deployed cell runs for weeks: when
+// the values would run out, the marks are cleared and counting starts again.
+int fresh_marks(Image<int>* marks, int* used, int span) {
+  if (*used > std::numeric_limits<int>::max() - span) {
+    std::fill(marks->pixels.begin(), marks->pixels.end(), 0);
+    *used = 0;
+  }
+  const int first = *used + 1;
+  *used += span;
+  return first;
+}
+
 // The bounding box of a set of cells bounds its l_max (as longest_distance measures it, with
 // the coordinate axes among its directions) from below by its longest side and from above by its
 // diagonal: most sets are decided by that alone.
@@ -329,16 +341,19 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
     }
     return true;
   };
-  const int claim = ++rb->claim_value;
-  // How many of the cells carry the mark; whether most of core c's do.
-  const auto marked = [&](const Image<int>& marks, int value, const int* cells, int n) {
+  const int claim = fresh_marks(&rb->claim, &rb->claim_value, 1);
+  // How many of the cells carry a mark in [first, end); whether most of core c's do.
+  const auto marked = [&](const Image<int>& marks, int first, int end, const int* cells, int n) {
     int in = 0;
-    for (int k = 0; k < n; ++k) in += marks.pixels[std::size_t(cells[k])] == value;
+    for (int k = 0; k < n; ++k) {
+      const int m = marks.pixels[std::size_t(cells[k])];
+      in += m >= first && m < end;
+    }
     return in;
   };
-  const auto core_mostly_marked = [&](const Image<int>& marks, int value, int c) {
+  const auto core_mostly_marked = [&](const Image<int>& marks, int first, int end, int c) {
     const int n = cores[c].end - cores[c].begin;
-    return 2 * marked(marks, value, &rb->core_cells[std::size_t(cores[c].begin)], n) > n;
+    return 2 * marked(marks, first, end, &rb->core_cells[std::size_t(cores[c].begin)], n) > n;
   };
   // The core continuing one of the region's open ends across a gap, nearest first; that end is
   // then replaced by the partner's far end. {-1, 0} when none.
@@ -358,7 +373,9 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
           const Eigen::Vector3f u(g.x() / gap, g.y() / gap, 0);
           if (ua.dot(u) < join_cos || -b.dir[f].dot(u) < join_cos) continue;
           if (std::abs(g.z()) > join_height_tol + kJoinMaxSlope * gap) continue;
-          if (core_mostly_marked(rb->stamp, stamp, k) || core_mostly_marked(rb->claim, claim, k)) continue;
+          if (core_mostly_marked(rb->stamp, stamp, stamp + 1, k) ||
+              core_mostly_marked(rb->claim, claim, claim + 1, k))
+            continue;
           if (!gap_covered(pa, b.p[f])) continue;
           best = {k, f}, best_end = e, best_gap = gap;
         }
@@ -369,21 +386,22 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
   };
 
   // 2. Grow each core while the normal of a neighbour is close to that of the boundary cell.
+  // grow_core(c, min_extent) grows core c into a region, a candidate when it is longer than
+  // min_extent, and says what became of it.
+  enum class Grown { candidate, claimed, overlapping, leaked, not_convex, too_short };
   int region_pool = 0;
-  for (int c = 0; c < n_cores && int(rb->candidates.size()) < cfg.max_candidates; ++c) {
+  const float long_extent = float(cfg.region_min_extent_of_l) * l;
+  const auto grow_core = [&](int c, float min_extent) {
     // A core lying mostly in the region of a larger one is another piece of that pipe's top.
     const int core_count = cores[c].end - cores[c].begin;
-    if (core_mostly_marked(rb->claim, claim, c)) {
-      ++stats.claimed;
-      continue;
-    }
+    if (core_mostly_marked(rb->claim, claim, claim + 1, c)) return Grown::claimed;
     // Growth is first held to region_max_reach_of_d * D from the core: a pipe's visible surface
     // lies within about D/2 of its top strip, and a touching pipe then adds a band, not itself.
     // A region too short that way (a top strip broken into pieces) is grown on without the
     // limit, the paper's growth, and kept if it then neither leaks nor stays short.
     int* cells = &rb->region_cells[region_pool];
     int count = 0;
-    const int stamp = ++rb->stamp_value;
+    const int stamp = fresh_marks(&rb->stamp, &rb->stamp_value, 1);
     Eigen::Vector3f centroid = Eigen::Vector3f::Zero();
     CellBox box;
     for (int k = cores[c].begin; k < cores[c].end && count < rb->max_region_cells; ++k) {
@@ -469,7 +487,6 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
         if (leaked || (head + 1 == core_count && !convex())) return;
       }
     };
-    const float min_extent = float(cfg.region_min_extent_of_l) * l;
     grow(0, reach_max);
     bool found = !leaked && convex() && box.longer_than(min_extent, zb, cells, count);
     // Beyond the paper: a top strip cut by a pipe lying across it, or by a dropout, falls into
@@ -502,16 +519,12 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
       grow(held_back, std::numeric_limits<int>::max() - 1);
       found = !leaked && box.longer_than(min_extent, zb, cells, count);
     }
-    if (!found) {
-      ++(leaked ? stats.leaked : !convex() ? stats.not_convex : stats.short_regions);
-      continue;
-    }
+    if (!found) return leaked ? Grown::leaked : !convex() ? Grown::not_convex : Grown::too_short;
     // A region lying mostly in earlier ones is another piece of a pipe already taken up (a top
     // strip broken into pieces whose cores lay apart).
-    if (float(marked(rb->claim, claim, cells, count)) > float(cfg.region_max_claimed_share) * float(count)) {
-      ++stats.overlapping;
-      continue;
-    }
+    if (float(marked(rb->claim, claim, claim + 1, cells, count)) >
+        float(cfg.region_max_claimed_share) * float(count))
+      return Grown::overlapping;
     CandidateRegion r;
     r.core_begin = cores[c].begin;
     r.core_end = cores[c].end;
@@ -523,7 +536,17 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
     for (int k = 0; k < count; ++k) rb->claim.pixels[cells[k]] = claim;
     region_pool += rb->max_region_cells;
     if (on_found) on_found(context, int(rb->candidates.size()));
-  }
+    return Grown::candidate;
+  };
+  const auto count_outcome = [&](Grown g) {
+    if (g == Grown::claimed) ++stats.claimed;
+    if (g == Grown::overlapping) ++stats.overlapping;
+    if (g == Grown::leaked) ++stats.leaked;
+    if (g == Grown::not_convex) ++stats.not_convex;
+    if (g == Grown::too_short) ++stats.short_regions;
+  };
+  for (int c = 0; c < n_cores && int(rb->candidates.size()) < cfg.max_candidates; ++c)
+    count_outcome(grow_core(c, long_extent));
   stats.candidates = int(rb->candidates.size());
   return stats;
 }
