@@ -48,6 +48,12 @@ Evidence ends_read(Evidence e, int best_pinned, int best_continued, int second_p
   return e;
 }
 
+// Found from a region shorter than a * L (tried after the long ones).
+Evidence from_short_region(Evidence e) {
+  e.short_region = true;
+  return e;
+}
+
 // The pixels where the best's and the rival's renders differ: `for_best` show the best, `for_rival`
 // the rival.
 Evidence told(Evidence e, int for_best, int for_rival) {
@@ -159,6 +165,14 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
       {"a third out of the view, ends read, one pinned",
        ends_read(judged(outside_view(seen(950, 0, 0), 0.35f)), 1, 0, 0, 0), true, CandidateOutcome::accepted,
        false, true, 0.95f},
+      // Not for a pose found from a region shorter than a * L: where it lies along what is out of
+      // the view, a short piece of its top does not say.
+      {"a third out of the view, well seen, from a short region",
+       from_short_region(judged(outside_view(seen(950, 0, 0), 0.35f))), true, CandidateOutcome::accepted,
+       false, false, 0.95f},
+      {"a fifth out of the view, the rest confirmed, from a short region",
+       from_short_region(judged(outside_view(seen(900, 0, 0), 0.2f))), true, CandidateOutcome::accepted,
+       false, true, 0.9f},
       {"a tenth under a pipe, a tenth out of the view", judged(outside_view(seen(900, 0, 100), 0.1f)), true,
        CandidateOutcome::accepted, false, true, 0.81f},
       {"a twentieth out of the view", judged(outside_view(seen(900, 0, 0), 0.05f)), true,

@@ -121,10 +121,12 @@ void add_locate(CLI::App& app) {
       }
     }
     spdlog::info(
-        "{} pipes found ({} candidate regions ({} of pieces joined across gaps), {} cores ({} split off "
-        "touching pipes, {} standing on the floor), {} of them in a larger one's region, {} grown mostly "
-        "into earlier regions; {} shorter than a * L, {} not convex, {} leaked) in {:.1f} ms; pick: {}",
-        out.estimates.size(), out.regions.candidates, out.regions.joined, out.regions.cores_kept,
+        "{} pipes found ({} candidate regions ({} of pieces joined across gaps, {} shorter than a * L "
+        "tried last), {} cores ({} split off touching pipes, {} standing on the floor), {} of them in a "
+        "larger one's region, {} grown mostly into earlier regions; {} too short, {} not convex, {} "
+        "leaked) in {:.1f} ms; pick: {}",
+        out.estimates.size(), out.regions.candidates, out.regions.joined, out.regions.short_candidates,
+        out.regions.cores_kept,
         out.regions.split_cores, out.regions.raised_cores,
         out.regions.claimed, out.regions.overlapping, out.regions.short_regions, out.regions.not_convex,
         out.regions.leaked, out.times.total_ms,

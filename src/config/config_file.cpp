@@ -199,6 +199,8 @@ void read_locate(Section& s, LocateConfig* c) {
   s.real("core_valley_turn", &c->core_valley_turn, 0, 2, "difference of unit-normal components");
   s.real("core_split_max_area_of_ld", &c->core_split_max_area_of_ld, 0, 1000, "x L x D");
   s.real("region_min_extent_of_l", &c->region_min_extent_of_l, 0, 2, "x L");
+  s.real("short_region_min_extent_of_l", &c->short_region_min_extent_of_l, 0, 2, "x L");
+  s.integer("max_short_candidates", &c->max_short_candidates, 0, 256, "regions");
   s.real("convexity_min_share", &c->convexity_min_share, 0, 1, "share");
   s.real("region_max_drop_of_d", &c->region_max_drop_of_d, 0.1, 5, "x D");
   s.real("region_max_reach_of_d", &c->region_max_reach_of_d, 0.1, 100, "x D");

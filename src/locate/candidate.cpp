@@ -156,10 +156,12 @@ Decision decide(const Evidence& e, const LocateConfig& cfg) {
   const float confirmed_of_whole = e.best.agreement() * (1.0f - e.best.outside_view);
   // ... or, up to verify_max_outside_view_well_seen of it out of the view, the image confirms
   // verify_well_seen_agreement of what is in view, and, for a pipe its ends place (a near twin,
-  // a slide), shows one of its ends.
+  // a slide), shows one of its ends. Not for a pose found from a short region: a pipe whose top
+  // is seen over a short length may lie anywhere along it out of the view.
   const bool checked_in_view = (e.best.outside_view <= float(cfg.verify_max_outside_view) &&
                                 confirmed_of_whole >= float(cfg.verify_min_agreement)) ||
-                               (e.best.outside_view <= float(cfg.verify_max_outside_view_well_seen) &&
+                               (!e.short_region &&
+                                e.best.outside_view <= float(cfg.verify_max_outside_view_well_seen) &&
                                 e.best.agreement() >= float(cfg.verify_well_seen_agreement) &&
                                 (!e.ends_judged || e.best.ends_pinned > 0));
   out.pickable = !out.ambiguous && e.best.occluded() <= float(cfg.verify_max_occluded) && checked_in_view;
@@ -475,6 +477,7 @@ bool work_candidate(const CandidateContext& ctx, const CandidateInput& in, const
   evidence.tube_d_mm = ctx.lm.tube_d_mm;
   evidence.extent_l_mm = ctx.lm.extent_l_mm;
   evidence.ends_must_pin = ctx.cfg.pin_slides_by_ends && !ctx.lm.slides.empty();
+  evidence.short_region = in.region->short_region;
   evidence.ends_judged = reads_ends(ctx);
   // Between two stages: decided by the evidence so far, or out of time. A candidate cut short
   // leaves no estimate (its outcome stays "budget").

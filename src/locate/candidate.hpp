@@ -86,6 +86,7 @@ struct Evidence {
   float extent_l_mm = 0;                          // L of the model
   bool ends_must_pin = false;                     // the model slides along itself: its ends place it
   bool ends_judged = false;                       // the poses' ends were read (slides, near twins)
+  bool short_region = false;                      // the region was shorter than a * L
   int ridge_points = 0;                           // observed_ridge: observed Z-ridge points
   float least_ridge_cost_mm = 1e30f;              // ridge_fits: least residual of the states continued
   bool have_best = false, have_second = false;    // hypotheses: the best judged, and a rival

@@ -45,6 +45,8 @@ struct LocateConfig {
                                         // towards each other by more (unit-normal components; 0: off)
   double core_split_max_area_of_ld = 8;  // ... and is not larger than this * L * D (else it is floor)
   double region_min_extent_of_l = 0.7;  // a of the paper
+  double short_region_min_extent_of_l = 0.5;  // shorter regions down to this * L are tried after the
+                                              // others (region_min_extent_of_l: off, the paper's cut)
   double region_max_drop_of_d = 0.8;    // grown cells lie at most this far below their core
   double region_max_reach_of_d = 1.0;   // ... and at most this far from it (steps of growth)
   double region_join_gap_of_d = 3;  // a region too short is joined to the piece of top strip that
@@ -121,6 +123,8 @@ struct LocateConfig {
 
   // Choice of the pick and fixed sizes.
   int max_candidates = 24;
+  // Of them at most this many shorter than a * L: each costs as much time as a long one.
+  int max_short_candidates = 4;
   int max_results = 16;
   int threads = 2;
 };
@@ -137,6 +141,7 @@ inline void use_paper_search(LocateConfig* c) {
   c->icp_continued_states = 2 * c->initial_rotations;
   c->judge_slides = false;
   c->residual_rescue_of_rth = 1;
+  c->short_region_min_extent_of_l = c->region_min_extent_of_l;
 }
 
 }  // namespace pipeloc

@@ -341,7 +341,10 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
     }
     return true;
   };
-  const int claim = fresh_marks(&rb->claim, &rb->claim_value, 1);
+  // A candidate region's cells are marked claim + the index of the core it grew from: a core
+  // yields only to the regions of cores before it (larger ones). A short region, grown again
+  // after the long ones, is not lost to a long region of a smaller core that ran over its pipe.
+  const int claim = fresh_marks(&rb->claim, &rb->claim_value, kMaxCores);
   // How many of the cells carry a mark in [first, end); whether most of core c's do.
   const auto marked = [&](const Image<int>& marks, int first, int end, const int* cells, int n) {
     int in = 0;
@@ -357,7 +360,7 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
   };
   // The core continuing one of the region's open ends across a gap, nearest first; that end is
   // then replaced by the partner's far end. {-1, 0} when none.
-  const auto join_partner = [&](JoinEnd open_ends[2], int stamp) -> JoinEnd {
+  const auto join_partner = [&](JoinEnd open_ends[2], int stamp, int claimed_before) -> JoinEnd {
     JoinEnd best{-1, 0};
     int best_end = -1;
     float best_gap = join_gap;
@@ -374,7 +377,7 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
           if (ua.dot(u) < join_cos || -b.dir[f].dot(u) < join_cos) continue;
           if (std::abs(g.z()) > join_height_tol + kJoinMaxSlope * gap) continue;
           if (core_mostly_marked(rb->stamp, stamp, stamp + 1, k) ||
-              core_mostly_marked(rb->claim, claim, claim + 1, k))
+              core_mostly_marked(rb->claim, claim, claimed_before, k))
             continue;
           if (!gap_covered(pa, b.p[f])) continue;
           best = {k, f}, best_end = e, best_gap = gap;
@@ -394,7 +397,7 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
   const auto grow_core = [&](int c, float min_extent) {
     // A core lying mostly in the region of a larger one is another piece of that pipe's top.
     const int core_count = cores[c].end - cores[c].begin;
-    if (core_mostly_marked(rb->claim, claim, claim + 1, c)) return Grown::claimed;
+    if (core_mostly_marked(rb->claim, claim, claim + c, c)) return Grown::claimed;
     // Growth is first held to region_max_reach_of_d * D from the core: a pipe's visible surface
     // lies within about D/2 of its top strip, and a touching pipe then adds a band, not itself.
     // A region too short that way (a top strip broken into pieces) is grown on without the
@@ -495,7 +498,7 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
     if (!found && !leaked && convex() && join_gap > 0) {
       JoinEnd open_ends[2] = {{c, 0}, {c, 1}};  // the joined strip's two ends
       for (int joins = 0; joins < kMaxJoins && !found; ++joins) {
-        const JoinEnd next = join_partner(open_ends, stamp);
+        const JoinEnd next = join_partner(open_ends, stamp, claim + c);
         if (next.core < 0) break;
         const int from = count;
         for (int k = cores[next.core].begin; k < cores[next.core].end && count < rb->max_region_cells; ++k) {
@@ -522,7 +525,7 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
     if (!found) return leaked ? Grown::leaked : !convex() ? Grown::not_convex : Grown::too_short;
     // A region lying mostly in earlier ones is another piece of a pipe already taken up (a top
     // strip broken into pieces whose cores lay apart).
-    if (float(marked(rb->claim, claim, claim + 1, cells, count)) >
+    if (float(marked(rb->claim, claim, claim + c, cells, count)) >
         float(cfg.region_max_claimed_share) * float(count))
       return Grown::overlapping;
     CandidateRegion r;
@@ -532,8 +535,9 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
     r.cells_end = region_pool + count;
     r.core_centroid = centroid;
     r.core_area_mm2 = cores[c].area;
+    r.short_region = min_extent < long_extent;
     rb->candidates.push_back(r);
-    for (int k = 0; k < count; ++k) rb->claim.pixels[cells[k]] = claim;
+    for (int k = 0; k < count; ++k) rb->claim.pixels[cells[k]] = claim + c;
     region_pool += rb->max_region_cells;
     if (on_found) on_found(context, int(rb->candidates.size()));
     return Grown::candidate;
@@ -545,8 +549,30 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
     if (g == Grown::not_convex) ++stats.not_convex;
     if (g == Grown::too_short) ++stats.short_regions;
   };
-  for (int c = 0; c < n_cores && int(rb->candidates.size()) < cfg.max_candidates; ++c)
-    count_outcome(grow_core(c, long_extent));
+  const auto room = [&] { return int(rb->candidates.size()) < cfg.max_candidates; };
+  // Beyond the paper: a region shorter than a * L is not dropped but tried after all the long
+  // ones (a top strip broken into pieces the joins did not mend, a pipe partly out of view), when
+  // it reaches short_region_min_extent_of_l * L: its fit and the verification judge it, and it
+  // cannot take a long region's place among the max_candidates.
+  const float short_min_extent =
+      float(std::min(cfg.short_region_min_extent_of_l, cfg.region_min_extent_of_l)) * l;
+  int short_cores[kMaxCores];
+  int n_short = 0;
+  for (int c = 0; c < n_cores && room(); ++c) {
+    const Grown g = grow_core(c, long_extent);
+    if (g == Grown::too_short && short_min_extent < long_extent)
+      short_cores[n_short++] = c;
+    else
+      count_outcome(g);
+  }
+  for (int k = 0; k < n_short; ++k) {
+    const bool short_room = room() && stats.short_candidates < cfg.max_short_candidates;
+    const Grown g = short_room ? grow_core(short_cores[k], short_min_extent) : Grown::too_short;
+    if (g == Grown::candidate)
+      ++stats.short_candidates;
+    else
+      count_outcome(g);
+  }
   stats.candidates = int(rb->candidates.size());
   return stats;
 }

@@ -15,6 +15,7 @@ struct CandidateRegion {
   int cells_begin = 0, cells_end = 0;  // grown region in RegionBuffers::region_cells
   Eigen::Vector3f core_centroid = Eigen::Vector3f::Zero();
   float core_area_mm2 = 0;
+  bool short_region = false;  // shorter than a * L: tried after the long ones
 };
 
 // Fixed-size working memory, sized once for a Z-buffer and a model.
@@ -22,7 +23,7 @@ struct RegionBuffers {
   Image<std::uint8_t> unlabelled_core;  // 1: upward normal, not yet in a core (this frame)
   Image<int> stamp;                     // growth visit marks
   Image<int> reach;                     // growth: steps from the core
-  Image<int> claim;                     // the frame's mark on cells of regions already taken up
+  Image<int> claim;                     // cells of regions already taken up: the frame's mark + their core
   int claim_value = 0;
   int stamp_value = 0;
   Image<float> ridge_z;                     // growth: height of the core cell each grown cell came from
@@ -44,7 +45,8 @@ struct RegionStats {
   int overlapping = 0;   // grown regions lying mostly in earlier candidate regions: one pipe, not tried again
   int leaked = 0;        // grown over far more than one pipe
   int not_convex = 0;    // the cells beside the core do not tilt away from it (floor between pipes)
-  int short_regions = 0; // shorter than a * L
+  int short_regions = 0; // shorter than a * L (and than short_region_min_extent_of_l * L)
+  int short_candidates = 0;  // candidates shorter than a * L, tried after the long ones
   int joined = 0;        // long enough once joined to pieces continuing them across gaps
 };
 
