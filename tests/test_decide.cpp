@@ -173,6 +173,11 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
       {"a fifth out of the view, the rest confirmed, from a short region",
        from_short_region(judged(outside_view(seen(900, 0, 0), 0.2f))), true, CandidateOutcome::accepted,
        false, true, 0.9f},
+      // The tube going on beyond both ends: the pipe there is longer than the pose.
+      {"ends read, the tube going on beyond both", ends_read(judged(seen(900, 0, 0)), 0, 2, 0, 0), true,
+       CandidateOutcome::accepted, false, false, 0.9f},
+      {"ends read, going on beyond one", ends_read(judged(seen(900, 0, 0)), 1, 1, 0, 0), true,
+       CandidateOutcome::accepted, false, true, 0.9f},
       {"a tenth under a pipe, a tenth out of the view", judged(outside_view(seen(900, 0, 100), 0.1f)), true,
        CandidateOutcome::accepted, false, true, 0.81f},
       {"a twentieth out of the view", judged(outside_view(seen(900, 0, 0), 0.05f)), true,

@@ -164,7 +164,12 @@ Decision decide(const Evidence& e, const LocateConfig& cfg) {
                                 e.best.outside_view <= float(cfg.verify_max_outside_view_well_seen) &&
                                 e.best.agreement() >= float(cfg.verify_well_seen_agreement) &&
                                 (!e.ends_judged || e.best.ends_pinned > 0));
-  out.pickable = !out.ambiguous && e.best.occluded() <= float(cfg.verify_max_occluded) && checked_in_view;
+  // Beyond the paper: where the image shows the tube going on beyond both ends of the pose, the
+  // pipe there is longer than the pose: it lies elsewhere along it (slid round a bend, across
+  // two pipes).
+  const bool ends_go_on = e.ends_judged && e.best.ends_continued >= 2;
+  out.pickable =
+      !out.ambiguous && e.best.occluded() <= float(cfg.verify_max_occluded) && checked_in_view && !ends_go_on;
   return out;
 }
 
