@@ -303,11 +303,10 @@ RidgeFits fit_ridges(const CandidateContext& ctx, const CandidateInput& in, cons
 
 namespace {
 
-// Whether the poses' ends are read (judge_ends): for a pipe that slides along itself or has a
-// near twin, the ends are what place it.
-bool reads_ends(const CandidateContext& ctx) {
-  return ctx.cfg.pin_slides_by_ends && (!ctx.lm.slides.empty() || !ctx.model.near_symmetries.empty());
-}
+// Whether the poses' ends are read (judge_ends): for every pipe. A pipe that slides along itself
+// or has a near twin is placed by its ends, and where the tube goes on beyond both ends of a
+// pose the pipe lies elsewhere.
+bool reads_ends(const CandidateContext& ctx) { return ctx.cfg.pin_slides_by_ends; }
 
 }  // namespace
 

@@ -115,7 +115,8 @@ struct LocateConfig {
   bool judge_slides = true;  // the found pose slid along the pipe itself (an arc about its centre,
                              // a coil along its helix, a straight run along its axis) is a rival too
   bool pin_slides_by_ends = true;  // a pipe that slides along itself is pickable only where the
-                                   // image shows one of its ends, and no end goes on beyond
+                                   // image shows one of its ends, and no end goes on beyond; every
+                                   // pipe's ends are read (off: none)
 
   // The paper's comparison: ICP on points sampled from the whole visible surface instead of the
   // Z-ridge (eval-bop --match surface).
