@@ -153,8 +153,8 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
        CandidateOutcome::accepted, false, false, 0.8f},
       {"a third out of the view", judged(outside_view(seen(850, 0, 0), 0.35f)), true,
        CandidateOutcome::accepted, false, false, 0.85f},
-      // Up to half out of the view where what is in view agrees 0.9, and for a pipe its ends
-      // place (near twins, slides), an end is pinned.
+      // Up to half out of the view where what is in view agrees 0.9, and, where the ends are
+      // read, an end is pinned.
       {"a third out of the view, what is in view well seen", judged(outside_view(seen(950, 0, 0), 0.35f)),
        true, CandidateOutcome::accepted, false, true, 0.95f},
       {"six tenths out of the view", judged(outside_view(seen(1000, 0, 0), 0.6f)), true,

@@ -155,9 +155,9 @@ Decision decide(const Evidence& e, const LocateConfig& cfg) {
   // counted as not confirmed (a pose hanging out of the view is checked on too little of it) ...
   const float confirmed_of_whole = e.best.agreement() * (1.0f - e.best.outside_view);
   // ... or, up to verify_max_outside_view_well_seen of it out of the view, the image confirms
-  // verify_well_seen_agreement of what is in view, and, for a pipe its ends place (a near twin,
-  // a slide), shows one of its ends. Not for a pose found from a short region: a pipe whose top
-  // is seen over a short length may lie anywhere along it out of the view.
+  // verify_well_seen_agreement of what is in view, and, where the ends are read, shows one of
+  // them. Not for a pose found from a short region: a pipe whose top is seen over a short length
+  // may lie anywhere along it out of the view.
   const bool checked_in_view = (e.best.outside_view <= float(cfg.verify_max_outside_view) &&
                                 confirmed_of_whole >= float(cfg.verify_min_agreement)) ||
                                (!e.short_region &&

@@ -85,7 +85,7 @@ struct Evidence {
   float tube_d_mm = 0;                            // D of the model
   float extent_l_mm = 0;                          // L of the model
   bool ends_must_pin = false;                     // the model slides along itself: its ends place it
-  bool ends_judged = false;                       // the poses' ends were read (slides, near twins)
+  bool ends_judged = false;                       // the poses' ends were read (pin_slides_by_ends)
   bool short_region = false;                      // the region was shorter than a * L
   int ridge_points = 0;                           // observed_ridge: observed Z-ridge points
   float least_ridge_cost_mm = 1e30f;              // ridge_fits: least residual of the states continued

@@ -102,8 +102,8 @@ struct LocateConfig {
   double verify_max_outside_view = 0.3;    // share of the model's vertices outside the image (and
                                            // agreement * (1 - this share) >= verify_min_agreement)
   double verify_max_outside_view_well_seen = 0.5;  // ... or up to this share where what is in view
-  double verify_well_seen_agreement = 0.9;         // ... agrees this well (and, for a pipe placed
-                                                   // by its ends, one end is pinned)
+  double verify_well_seen_agreement = 0.9;         // ... agrees this well (and, where the ends
+                                                   // are read, one end is pinned)
   double side_drop_of_d = 0.25;            // a pipe's surroundings lie at least this * D beyond its silhouette ...
   double verify_max_side_level = 0.3;      // ... but for at most this share (more: a smooth blob, not a pipe)
   int verify_hypotheses = 3;               // distinct ridge fits refined and checked per region
