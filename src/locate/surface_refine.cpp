@@ -12,6 +12,12 @@ namespace {
 constexpr float kHuberMm = 1.5f;
 // Fewer inliers than this cannot hold six degrees of freedom against the noise: stop.
 constexpr int kMinInliers = 12;
+// Levenberg-Marquardt damping, a share of each unknown's own weight, for a straight tube: points
+// on its side fix neither the slide along its axis nor the turn about it (the normal equations
+// are singular there), and the undamped solve moved such a pose metres in one step. Arcs and
+// coils are nearly as free along themselves, but damped they kept slid poses the image could not
+// tell from their pipe (docs/experiments.md, "A straight tube's refinement damped").
+constexpr double kStraightDamping = 1e-3;
 
 }  // namespace
 
@@ -69,6 +75,7 @@ RefineResult refine_on_surface(const LocatorModel& lm, const Pose& start, const 
       }
     }
     a.triangularView<Eigen::StrictlyUpper>() = a.transpose();
+    if (lm.straight) a.diagonal() *= 1.0 + kStraightDamping;
     res.inliers = inliers * stride;  // about: only the fine iterations count them all
     res.rms_mm = inliers ? float(std::sqrt(sq / inliers)) : 0.f;
     if (inliers < kMinInliers) break;
