@@ -301,15 +301,6 @@ RidgeFits fit_ridges(const CandidateContext& ctx, const CandidateInput& in, cons
   return out;
 }
 
-namespace {
-
-// Whether the poses' ends are read (judge_ends): for every pipe. A pipe that slides along itself
-// or has a near twin is placed by its ends, and where the tube goes on beyond both ends of a
-// pose the pipe lies elsewhere.
-bool reads_ends(const CandidateContext& ctx) { return ctx.cfg.pin_slides_by_ends; }
-
-}  // namespace
-
 Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& in,
                             const ObservedRidge& observed, const RidgeFits& fitted, const Deadline& deadline,
                             CandidateBuffers* buf) {
@@ -376,7 +367,10 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
         }
       }
     }
-    if (reads_ends(ctx))
+    // The poses' ends are read for every pipe: a pipe that slides along itself or has a near
+    // twin is placed by its ends, and where the tube goes on beyond both ends of a pose the pipe
+    // lies elsewhere.
+    if (cfg.pin_slides_by_ends)
       judge_ends(lm.centreline_points, lm.tube_d_mm, e.model_to_cam, ctx.depth, ctx.camera,
                  float(cfg.verify_tolerance_mm), &e.check);
     if (!std::isnan(ctx.lowest_surface_z_mm))
@@ -482,7 +476,7 @@ bool work_candidate(const CandidateContext& ctx, const CandidateInput& in, const
   evidence.extent_l_mm = ctx.lm.extent_l_mm;
   evidence.ends_must_pin = ctx.cfg.pin_slides_by_ends && !ctx.lm.slides.empty();
   evidence.short_region = in.region->short_region;
-  evidence.ends_judged = reads_ends(ctx);
+  evidence.ends_judged = ctx.cfg.pin_slides_by_ends;
   // Between two stages: decided by the evidence so far, or out of time. A candidate cut short
   // leaves no estimate (its outcome stays "budget").
   const auto settled = [&] {
