@@ -99,6 +99,7 @@ struct Row {
   CandidateOutcome outcome;
   bool ambiguous, pickable;
   float score;
+  bool rival_taken = false;  // the rival, not the best, is judged and handed on
 };
 
 TEST(Decide, EveryOutcomeFromItsEvidence) {
@@ -211,6 +212,17 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
       {"twin's end goes on, the pixels speak for it too",
        told(ends_read(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), 1, 0, 1, 1), 28, 18), true,
        CandidateOutcome::accepted, true, false, 0.45f},
+      // A rival about as good whose ends the image shows better is the pipe (rival_taken): the
+      // best by a hair with no end seen, or with the tube going on beyond one of its ends.
+      {"rival as good, the image pins its end and not the best's",
+       ends_read(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), 0, 0, 1, 0), true,
+       CandidateOutcome::accepted, false, true, 0.88f, true},
+      {"rival as good, the tube goes on beyond the best's end",
+       ends_read(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), 1, 1, 1, 0), true,
+       CandidateOutcome::accepted, false, true, 0.88f, true},
+      {"rival as good, its end pinned, but under the floor",
+       ends_read(judged_with_rival(seen(900, 0, 0), below_floor(seen(880, 0, 0), 0.31f)), 0, 0, 1, 0), true,
+       CandidateOutcome::not_confirmed, false, false, 0, true},
       {"rival clearly worse", judged_with_rival(seen(900, 0, 0), seen(840, 0, 0)), true,
        CandidateOutcome::accepted, false, true, 0.9f},
       // A pipe that slides along itself (an arc, a coil, a straight run) is placed by its ends.
@@ -219,6 +231,11 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
       {"sliding, no end seen", sliding(judged(seen(900, 0, 0)), 0, 0), true, CandidateOutcome::accepted, true,
        false, 0.45f},
       {"sliding, the tube goes on beyond an end", sliding(judged(seen(900, 0, 0)), 1, 1), true,
+       CandidateOutcome::accepted, true, false, 0.45f},
+      // ... and a slid rival pinned where the best is not does not take its place (a slid coil's
+      // end stopping short of a pipe in front reads as pinned): ambiguous.
+      {"sliding, a slid rival as good pinned",
+       sliding(ends_read(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), 0, 0, 1, 0), 0, 0), true,
        CandidateOutcome::accepted, true, false, 0.45f},
       {"rival seen through: worse", judged_with_rival(seen(900, 0, 0), seen(900, 30, 0)), true,
        CandidateOutcome::accepted, false, true, 0.9f},
@@ -233,6 +250,7 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
     EXPECT_EQ(d.ambiguous, row.ambiguous);
     EXPECT_EQ(d.pickable, row.pickable);
     EXPECT_NEAR(d.score, row.score, 1e-5f);
+    EXPECT_EQ(d.rival_taken, row.rival_taken);
   }
 }
 

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 namespace pipeloc {
 namespace {
@@ -52,6 +53,17 @@ int explained_points(const CandidateContext& ctx, const Image<float>& rendered, 
 float seen_through(const CandidateContext& ctx, const RidgeFit& f, const CandidateBuffers& buf) {
   return seen_through_share(ctx.zb, buf.icp.model_ridge(), f.model_ridge_points,
                             float(ctx.cfg.verify_tolerance_mm));
+}
+
+// How well the image shows a pose's ends where they are: an end pinned speaks for it, the tube
+// going on beyond an end (the pipe lies elsewhere along it) twice as much against.
+int ends_shown(const Verification& v) { return v.ends_pinned - 2 * v.ends_continued; }
+
+// The same evidence with the best and its rival in each other's place.
+Evidence rival_first(Evidence e) {
+  std::swap(e.best, e.second);
+  std::swap(e.told.for_a, e.told.for_b);
+  return e;
 }
 
 // A check of decide(): the candidate fails as `outcome` unless `passes`, once the evidence has
@@ -112,8 +124,19 @@ const char* outcome_name(CandidateOutcome o) {
   return "?";
 }
 
-Decision decide(const Evidence& e, const LocateConfig& cfg) {
+Decision decide(const Evidence& given, const LocateConfig& cfg) {
   Decision out;
+  // Beyond the paper: of two poses the image confirms about as well (a near twin), the one whose
+  // ends it shows where they are is the pipe: a best by a hair whose end is not seen, or beyond
+  // which the tube goes on, gives way to a rival the image pins; the checks below judge the
+  // rival. Not for a pipe that slides along itself: in a pile, a slid coil's end that stops short
+  // of a pipe in front reads as pinned (17-coil: 10 wrong picks while clearing 3 bins).
+  out.rival_taken = given.reached == CandidateStage::hypotheses && given.ends_judged &&
+                    !given.ends_must_pin && given.have_best && given.have_second &&
+                    hypothesis_quality(given.second) >=
+                        hypothesis_quality(given.best) - float(cfg.ambiguity_quality_margin) &&
+                    ends_shown(given.second) > ends_shown(given.best);
+  const Evidence e = out.rival_taken ? rival_first(given) : given;
   for (const Check& check : kChecks) {
     if (int(check.after) > int(e.reached)) break;
     if (!check.passes(e, cfg)) {
@@ -129,7 +152,6 @@ Decision decide(const Evidence& e, const LocateConfig& cfg) {
   out.outcome = CandidateOutcome::accepted;
   // ... unless the image shows the best's ends where they are and not the rival's (a near twin
   // whose telling end is in view: beyond one of its ends the tube goes on, or it is not pinned).
-  const auto ends_shown = [](const Verification& v) { return v.ends_pinned - 2 * v.ends_continued; };
   // ... or where the two differ, the image speaks for the best and hardly for the rival (not for
   // a pipe that slides along itself: its ends place it, below).
   const bool told_apart = cfg.tell_rivals_apart && !e.ends_must_pin && e.told.for_a >= kMinTellingPx &&
@@ -504,16 +526,17 @@ bool work_candidate(const CandidateContext& ctx, const CandidateInput& in, const
 
   const Hypotheses judged = judge_hypotheses(ctx, in, observed, fits, deadline, buf);
   if (!judged.complete) return false;
-  trace->check = judged.best.check;
-  trace->refined_to_cam = judged.best.model_to_cam;
   evidence.reached = CandidateStage::hypotheses;
   evidence.have_best = judged.have_best, evidence.have_second = judged.have_second;
   evidence.best = judged.best.check, evidence.second = judged.second.check;
   evidence.told = judged.told;
   const Decision decision = decide(evidence, ctx.cfg);
+  const PipeEstimate& taken = decision.rival_taken ? judged.second : judged.best;
+  trace->check = taken.check;
+  trace->refined_to_cam = taken.model_to_cam;
   trace->outcome = decision.outcome;
   if (decision.outcome != CandidateOutcome::accepted) return false;
-  *estimate = judged.best;
+  *estimate = taken;
   estimate->ambiguous = decision.ambiguous;
   estimate->score = decision.score;
   estimate->pickable = decision.pickable;
