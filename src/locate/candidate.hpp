@@ -105,9 +105,9 @@ struct Decision {
 
 // The outcome of a candidate from its evidence: the first check it fails (in the order of the
 // stages), or accepted with ambiguity, pick and score once the hypotheses are judged (of the best,
-// or of the rival where rival_taken). The checks
-// are a table in candidate.cpp: a new verification check is one row there. ("duplicate" is the
-// locator's, across candidates; "budget" is the outcome of a candidate never decided.)
+// or of the rival where rival_taken). The checks are a table in candidate.cpp: a new verification
+// check is one row there. ("duplicate" is the locator's, across candidates; "budget" is the
+// outcome of a candidate never decided.)
 Decision decide(const Evidence& evidence, const LocateConfig& cfg);
 
 // R_th of Algorithm 2: ridge fits with a larger residual are not pursued.
