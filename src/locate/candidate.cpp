@@ -55,6 +55,11 @@ float seen_through(const CandidateContext& ctx, const RidgeFit& f, const Candida
                             float(ctx.cfg.verify_tolerance_mm));
 }
 
+// A rival the image confirms about as well as the best: within ambiguity_quality_margin of it.
+bool as_good(const Verification& rival, const Verification& best, const LocateConfig& cfg) {
+  return hypothesis_quality(rival) >= hypothesis_quality(best) - float(cfg.ambiguity_quality_margin);
+}
+
 // How well the image shows a pose's ends where they are: an end pinned speaks for it, the tube
 // going on beyond an end (the pipe lies elsewhere along it) twice as much against.
 int ends_shown(const Verification& v) { return v.ends_pinned - 2 * v.ends_continued; }
@@ -133,8 +138,7 @@ Decision decide(const Evidence& given, const LocateConfig& cfg) {
   // of a pipe in front reads as pinned (17-coil: 10 wrong picks while clearing 3 bins).
   out.rival_taken = given.reached == CandidateStage::hypotheses && given.ends_judged &&
                     !given.ends_must_pin && given.have_best && given.have_second &&
-                    hypothesis_quality(given.second) >=
-                        hypothesis_quality(given.best) - float(cfg.ambiguity_quality_margin) &&
+                    as_good(given.second, given.best, cfg) &&
                     ends_shown(given.second) > ends_shown(given.best);
   const Evidence e = out.rival_taken ? rival_first(given) : given;
   for (const Check& check : kChecks) {
@@ -162,10 +166,8 @@ Decision decide(const Evidence& given, const LocateConfig& cfg) {
   const bool pixels_for_rival =
       cfg.tell_rivals_apart && 2 * e.told.for_b >= kMinTellingPx && 2 * e.told.for_b > e.told.for_a;
   const int rival_ends_shown = pixels_for_rival ? e.second.ends_pinned : ends_shown(e.second);
-  out.ambiguous =
-      e.have_second &&
-      hypothesis_quality(e.second) >= hypothesis_quality(e.best) - float(cfg.ambiguity_quality_margin) &&
-      !(e.ends_judged && ends_shown(e.best) > rival_ends_shown) && !told_apart;
+  out.ambiguous = e.have_second && as_good(e.second, e.best, cfg) &&
+                  !(e.ends_judged && ends_shown(e.best) > rival_ends_shown) && !told_apart;
   // Beyond the paper: a pipe that slides along itself is placed along its length only by an end
   // the image shows; where none is seen, or the tube goes on beyond one, the pose may be slid.
   if (e.ends_must_pin && (e.best.ends_pinned == 0 || e.best.ends_continued > 0)) out.ambiguous = true;
@@ -475,9 +477,7 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
   }
   // Beyond the paper: where the best and a rival about as good differ (a near twin's longer leg,
   // a slid pose's ends), which one the image shows (decide() weighs it with the ends).
-  if (cfg.tell_rivals_apart && have_best && have_second &&
-      hypothesis_quality(second.check) >=
-          hypothesis_quality(best.check) - float(cfg.ambiguity_quality_margin)) {
+  if (cfg.tell_rivals_apart && have_best && have_second && as_good(second.check, best.check, cfg)) {
     const auto t0 = Clock::now();
     const PixelBox box_best = render_depth_in_box(lm.verify_mesh, best.model_to_cam, ctx.camera,
                                                   &buf->scratch_depth, &buf->scratch_mesh, lm.verify_winding);
