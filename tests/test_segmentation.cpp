@@ -361,6 +361,37 @@ TEST(Segmentation, AThinTubeJoinedToTheFloorGetsACoreOfItsOwn) {
   EXPECT_LT(c.core_centroid.x(), x0 + length);
 }
 
+// A thin half ring lying on the floor, where the floor reads 0.3 D higher than the tube's bottom
+// (noise, blended rim pixels: 15-arc of the zoo, an 11.5 mm tube at 0.84 m): growth down to
+// 0.8 D below the top runs onto the floor beside the tube, over more cells than three times
+// L x D (a leak: no candidate). The region is grown again down to the tube's equator only, after
+// the other cores, and stays on the tube.
+TEST(Segmentation, AThinPipeWhoseRegionLeaksOntoTheFloorIsGrownToItsEquator) {
+  constexpr double d = 11.5, r = d / 2, ring = 85, cx = 150, cy = 100, floor_z = 0.3 * d;
+  const ZBuffer zb = synthetic_zbuffer(300, [&](double x, double y) {
+    const double off = std::hypot(x - cx, y - cy) - ring;
+    if (y >= cy && std::abs(off) <= r) return float(std::max(floor_z, r + std::sqrt(r * r - off * off)));
+    return float(floor_z);
+  });
+  const float extent_l = float(2 * ring + d);
+  LocateConfig cfg;
+  NormalMap nm;
+  reserve_normals(&nm, zb);
+  compute_normals(zb, 5, 10, &nm);
+  RegionBuffers rb;
+  reserve_regions(&rb, zb, cfg, float(d), extent_l);
+  mark_upward_rows(zb, nm, cfg, 0, zb.height, &rb);
+  const RegionStats stats = extract_candidate_regions(zb, nm, cfg, float(d), extent_l, &rb);
+  EXPECT_EQ(stats.leaked, 0);
+  EXPECT_EQ(stats.regrown_after_leak, 1);
+  ASSERT_EQ(stats.candidates, 1);
+  const CandidateRegion& c = rb.candidates[0];
+  int off_tube = 0;
+  for (int k = c.cells_begin; k < c.cells_end; ++k)
+    off_tube += zb.z.pixels[std::size_t(rb.region_cells[std::size_t(k)])] < r;
+  EXPECT_EQ(off_tube, 0) << "of " << c.cells_end - c.cells_begin << " region cells";
+}
+
 // The growth's visit marks and the regions' claims count up frame by frame; a deployed cell runs
 // for weeks, longer than an int counts. When the values run out the marks are cleared: the same
 // frame gives the same candidates as with fresh buffers.

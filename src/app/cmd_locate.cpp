@@ -122,13 +122,14 @@ void add_locate(CLI::App& app) {
     }
     spdlog::info(
         "{} pipes found ({} candidate regions ({} of pieces joined across gaps, {} shorter than a * L "
-        "tried last), {} cores ({} split off touching pipes, {} standing on the floor), {} of them in a "
-        "larger one's region, {} grown mostly into earlier regions; {} too short, {} not convex, {} "
-        "leaked) in {:.1f} ms; pick: {}",
+        "tried last, {} grown again to the equator after leaking), {} cores ({} split off touching "
+        "pipes, {} standing on the floor), {} of them in a larger one's region, {} grown mostly into "
+        "earlier regions; {} too short, {} not convex, {} leaked) in {:.1f} ms; pick: {}",
         out.estimates.size(), out.regions.candidates, out.regions.joined, out.regions.short_candidates,
-        out.regions.cores_kept, out.regions.split_cores, out.regions.raised_cores, out.regions.claimed,
-        out.regions.overlapping, out.regions.short_regions, out.regions.not_convex, out.regions.leaked,
-        out.times.total_ms, pick >= 0 ? "rank " + std::to_string(pick) : std::string("none"));
+        out.regions.regrown_after_leak, out.regions.cores_kept, out.regions.split_cores,
+        out.regions.raised_cores, out.regions.claimed, out.regions.overlapping, out.regions.short_regions,
+        out.regions.not_convex, out.regions.leaked, out.times.total_ms,
+        pick >= 0 ? "rank " + std::to_string(pick) : std::string("none"));
     const StageTimes& st = out.times;
     if (out.noise.samples > 0)
       spdlog::info("depth noise {:.2f} mm (1 sigma, measured) at a median depth of {:.0f} mm",

@@ -15,6 +15,8 @@ constexpr double kDeg = M_PI / 180.0;
 constexpr int kMaxJoins = 4;
 constexpr double kJoinMaxTurnDeg = 35;
 constexpr float kJoinMaxSlope = 0.3f;  // height change per mm of gap (a pipe leaning on others)
+// A region that leaks is grown again down to this share of D below its core: the tube's equator.
+constexpr float kLeakedDropOfD = 0.5f;
 struct JoinEnd {
   int core, end;
 };
@@ -394,7 +396,8 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
   enum class Grown { candidate, claimed, overlapping, leaked, not_convex, too_short };
   int region_pool = 0;
   const float long_extent = float(cfg.region_min_extent_of_l) * l;
-  const auto grow_core = [&](int c, float min_extent) {
+  // drop: growth goes at most this far below the top it grew from.
+  const auto grow_core = [&](int c, float min_extent, float drop) {
     // A core lying mostly in the region of a larger one is another piece of that pipe's top.
     const int core_count = cores[c].end - cores[c].begin;
     if (core_mostly_marked(rb->claim, claim, claim + c, c)) return Grown::claimed;
@@ -470,7 +473,7 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
           const Eigen::Vector3f& nn = nm.n.pixels[q];
           if (!has_normal(nn)) continue;
           const float zq = zb.z.pixels[q];
-          if (nn.dot(ni_n) <= cont_min || (gap == 0 && std::abs(zq - zi) > step_max) || zq < top - drop_max)
+          if (nn.dot(ni_n) <= cont_min || (gap == 0 && std::abs(zq - zi) > step_max) || zq < top - drop)
             continue;
           // A piece of a split core does not grow back over the valley it was split along.
           if (split && in_valley(ni, nj)) continue;
@@ -557,17 +560,37 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
   const float short_min_extent =
       float(std::min(cfg.short_region_min_extent_of_l, cfg.region_min_extent_of_l)) * l;
   int short_cores[kMaxCores];
+  float short_drop[kMaxCores];  // the drop each was grown with
   int n_short = 0;
+  int leaked_cores[kMaxCores];
+  int n_leaked = 0;
   for (int c = 0; c < n_cores && room(); ++c) {
-    const Grown g = grow_core(c, long_extent);
+    const Grown g = grow_core(c, long_extent, drop_max);
     if (g == Grown::too_short && short_min_extent < long_extent)
-      short_cores[n_short++] = c;
+      short_drop[n_short] = drop_max, short_cores[n_short++] = c;
+    else if (g == Grown::leaked)
+      leaked_cores[n_leaked++] = c;
+    else
+      count_outcome(g);
+  }
+  // Beyond the paper: a thin pipe lying on the floor (or on a flat pipe) has its surroundings
+  // little more than D below its top; noise and blended rim pixels let growth down onto them and
+  // over the floor. A region that leaked is grown again down to D/2 below its core (about the
+  // tube's equator, the lowest a camera above sees of it), after the others: it takes no cells
+  // from their pipes (15-arc of the zoo: no candidate for a lone 11.5 mm half ring before).
+  const float equator_drop = std::min(drop_max, kLeakedDropOfD * d);
+  for (int k = 0; k < n_leaked; ++k) {
+    const Grown g = room() ? grow_core(leaked_cores[k], long_extent, equator_drop) : Grown::leaked;
+    stats.regrown_after_leak += g == Grown::candidate;
+    if (g == Grown::too_short && short_min_extent < long_extent)
+      short_drop[n_short] = equator_drop, short_cores[n_short++] = leaked_cores[k];
     else
       count_outcome(g);
   }
   for (int k = 0; k < n_short; ++k) {
     const bool short_room = room() && stats.short_candidates < cfg.max_short_candidates;
-    const Grown g = short_room ? grow_core(short_cores[k], short_min_extent) : Grown::too_short;
+    const Grown g =
+        short_room ? grow_core(short_cores[k], short_min_extent, short_drop[k]) : Grown::too_short;
     if (g == Grown::candidate)
       ++stats.short_candidates;
     else

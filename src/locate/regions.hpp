@@ -44,6 +44,7 @@ struct RegionStats {
   int raised_cores = 0;  // cores kept from one too large (the floor) by standing clear above it
   int overlapping = 0;   // grown regions lying mostly in earlier candidate regions: one pipe, not tried again
   int leaked = 0;        // grown over far more than one pipe
+  int regrown_after_leak = 0;  // candidates once grown down to the tube's equator only, after a leak
   int not_convex = 0;    // the cells beside the core do not tilt away from it (floor between pipes)
   int short_regions = 0; // shorter than a * L (and than short_region_min_extent_of_l * L)
   int short_candidates = 0;  // candidates shorter than a * L, tried after the long ones
