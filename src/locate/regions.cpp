@@ -391,12 +391,11 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
   };
 
   // 2. Grow each core while the normal of a neighbour is close to that of the boundary cell.
-  // grow_core(c, min_extent) grows core c into a region, a candidate when it is longer than
-  // min_extent, and says what became of it.
+  // grow_core(c, min_extent, drop) grows core c into a region, at most drop below the core's
+  // cells it grew from, a candidate when it is longer than min_extent, and says what became of it.
   enum class Grown { candidate, claimed, overlapping, leaked, not_convex, too_short };
   int region_pool = 0;
   const float long_extent = float(cfg.region_min_extent_of_l) * l;
-  // drop: growth goes at most this far below the top it grew from.
   const auto grow_core = [&](int c, float min_extent, float drop) {
     // A core lying mostly in the region of a larger one is another piece of that pipe's top.
     const int core_count = cores[c].end - cores[c].begin;
