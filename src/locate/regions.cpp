@@ -561,16 +561,21 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
   int short_cores[kMaxCores];
   float short_drop[kMaxCores];  // the drop each was grown with
   int n_short = 0;
+  // A region too short waits for the short pass below, with the drop it was grown with.
+  const auto settle = [&](int c, float drop, Grown g) {
+    if (g == Grown::too_short && short_min_extent < long_extent)
+      short_drop[n_short] = drop, short_cores[n_short++] = c;
+    else
+      count_outcome(g);
+  };
   int leaked_cores[kMaxCores];
   int n_leaked = 0;
   for (int c = 0; c < n_cores && room(); ++c) {
     const Grown g = grow_core(c, long_extent, drop_max);
-    if (g == Grown::too_short && short_min_extent < long_extent)
-      short_drop[n_short] = drop_max, short_cores[n_short++] = c;
-    else if (g == Grown::leaked)
+    if (g == Grown::leaked)
       leaked_cores[n_leaked++] = c;
     else
-      count_outcome(g);
+      settle(c, drop_max, g);
   }
   // Beyond the paper: a thin pipe lying on the floor (or on a flat pipe) has its surroundings
   // little more than D below its top; noise and blended rim pixels let growth down onto them and
@@ -581,10 +586,7 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
   for (int k = 0; k < n_leaked; ++k) {
     const Grown g = room() ? grow_core(leaked_cores[k], long_extent, equator_drop) : Grown::leaked;
     stats.regrown_after_leak += g == Grown::candidate;
-    if (g == Grown::too_short && short_min_extent < long_extent)
-      short_drop[n_short] = equator_drop, short_cores[n_short++] = leaked_cores[k];
-    else
-      count_outcome(g);
+    settle(leaked_cores[k], equator_drop, g);
   }
   for (int k = 0; k < n_short; ++k) {
     const bool short_room = room() && stats.short_candidates < cfg.max_short_candidates;
