@@ -328,11 +328,22 @@ TEST(Segmentation, HeldGrowthKeepsRegionsOnTheirPipe) {
   EXPECT_GT(n_held, n_unlimited);
 }
 
-
 // Beyond the paper: a thin tube on the floor whose top strip runs into the floor over upward
 // cells (here a ramp at one end; in the zoo, noise turning normals on its sides upward) joins the
 // floor's core, far too large to be a pipe. Its top stands clear above the plane that core lies
 // in and is taken off it as a core of its own, which grows into a candidate (before: none).
+// The candidate regions of a synthetic Z-buffer with the default config (normals over a 5 mm
+// window), for a pipe of diameter d and extent l.
+RegionStats default_regions(const ZBuffer& zb, double d, double l, RegionBuffers* rb) {
+  const LocateConfig cfg;
+  NormalMap nm;
+  reserve_normals(&nm, zb);
+  compute_normals(zb, 5, 10, &nm);
+  reserve_regions(rb, zb, cfg, float(d), float(l));
+  mark_upward_rows(zb, nm, cfg, 0, zb.height, rb);
+  return extract_candidate_regions(zb, nm, cfg, float(d), float(l), rb);
+}
+
 TEST(Segmentation, AThinTubeJoinedToTheFloorGetsACoreOfItsOwn) {
   constexpr double d = 8.7, r = d / 2, length = 180, axis_y = 150, x0 = 60, ramp = 20;
   const auto tube_top = [&](double y) {
@@ -344,14 +355,8 @@ TEST(Segmentation, AThinTubeJoinedToTheFloorGetsACoreOfItsOwn) {
     if (x >= x0 - ramp && x < x0) return float(tube_top(y) * (x - (x0 - ramp)) / ramp);
     return 0.0f;
   });
-  LocateConfig cfg;
-  NormalMap nm;
-  reserve_normals(&nm, zb);
-  compute_normals(zb, 5, 10, &nm);
   RegionBuffers rb;
-  reserve_regions(&rb, zb, cfg, float(d), float(length));
-  mark_upward_rows(zb, nm, cfg, 0, zb.height, &rb);
-  const RegionStats stats = extract_candidate_regions(zb, nm, cfg, float(d), float(length), &rb);
+  const RegionStats stats = default_regions(zb, d, length, &rb);
   EXPECT_EQ(stats.raised_cores, 1);
   ASSERT_EQ(stats.candidates, 1);
   const CandidateRegion& c = rb.candidates[0];
@@ -373,15 +378,8 @@ TEST(Segmentation, AThinPipeWhoseRegionLeaksOntoTheFloorIsGrownToItsEquator) {
     if (y >= cy && std::abs(off) <= r) return float(std::max(floor_z, r + std::sqrt(r * r - off * off)));
     return float(floor_z);
   });
-  const float extent_l = float(2 * ring + d);
-  LocateConfig cfg;
-  NormalMap nm;
-  reserve_normals(&nm, zb);
-  compute_normals(zb, 5, 10, &nm);
   RegionBuffers rb;
-  reserve_regions(&rb, zb, cfg, float(d), extent_l);
-  mark_upward_rows(zb, nm, cfg, 0, zb.height, &rb);
-  const RegionStats stats = extract_candidate_regions(zb, nm, cfg, float(d), extent_l, &rb);
+  const RegionStats stats = default_regions(zb, d, 2 * ring + d, &rb);
   EXPECT_EQ(stats.leaked, 0);
   EXPECT_EQ(stats.regrown_after_leak, 1);
   ASSERT_EQ(stats.candidates, 1);

@@ -558,13 +558,16 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
   // cannot take a long region's place among the max_candidates.
   const float short_min_extent =
       float(std::min(cfg.short_region_min_extent_of_l, cfg.region_min_extent_of_l)) * l;
-  int short_cores[kMaxCores];
-  float short_drop[kMaxCores];  // the drop each was grown with
+  struct Deferred {
+    int core;
+    float drop;  // grown with
+  };
+  Deferred short_cores[kMaxCores];
   int n_short = 0;
   // A region too short waits for the short pass below, with the drop it was grown with.
   const auto settle = [&](int c, float drop, Grown g) {
     if (g == Grown::too_short && short_min_extent < long_extent)
-      short_drop[n_short] = drop, short_cores[n_short++] = c;
+      short_cores[n_short++] = {c, drop};
     else
       count_outcome(g);
   };
@@ -591,7 +594,7 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
   for (int k = 0; k < n_short; ++k) {
     const bool short_room = room() && stats.short_candidates < cfg.max_short_candidates;
     const Grown g =
-        short_room ? grow_core(short_cores[k], short_min_extent, short_drop[k]) : Grown::too_short;
+        short_room ? grow_core(short_cores[k].core, short_min_extent, short_cores[k].drop) : Grown::too_short;
     if (g == Grown::candidate)
       ++stats.short_candidates;
     else
