@@ -2,11 +2,19 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <cmath>
+#include <ctime>
 #include <filesystem>
+#include <string>
+#include <vector>
 
+#include "io/bop.hpp"
+#include "io/json_file.hpp"
+#include "io/png.hpp"
 #include "model/make_pipe.hpp"
 #include "report/locate_overlay.hpp"
+#include "sim/sensor.hpp"
 
 namespace pipeloc {
 namespace {
@@ -209,8 +217,50 @@ void Service::write_overlays() {
   }
 }
 
+// The maintainer's record of why the cell stood still: the last log.no_pick_frames LOCATEs that
+// handed out no pose keep their depth frame and camera (located again with `pipeloc locate
+// --depth F-depth.png --camera F-camera.json`) and the overlay, in log.dir/no-pick/. Names start
+// with the UTC time, so they sort oldest first; older ones are removed.
+void Service::keep_no_pick_frame() {
+  if (cfg_.log.no_pick_frames <= 0 || record_.command != std::uint16_t(reg::Command::locate) ||
+      record_.grab != GrabStatus::ok || !ranked_.empty())
+    return;
+  namespace fs = std::filesystem;
+  try {
+    const fs::path dir = fs::path(cfg_.log.dir) / "no-pick";
+    fs::create_directories(dir);
+    const std::time_t now = std::time(nullptr);
+    std::tm utc{};
+    gmtime_r(&now, &utc);
+    char stem[64];
+    const std::size_t n = std::strftime(stem, sizeof stem, "%Y%m%d-%H%M%S", &utc);
+    std::snprintf(stem + n, sizeof stem - n, "-cycle%08u", cycles_);
+    const std::string base = (dir / stem).string();
+    write_depth_png(base + "-depth.png", to_raw_depth(frame_.depth_mm, frame_.camera.depth_scale));
+    write_json(base + "-camera.json", Json{{"0", camera_to_json(frame_.camera)}});
+    write_rgb_png(base + "-overlay.png", draw_locate_overlay(locator_, frame_.depth_mm, frame_.camera));
+    const std::string suffix = "-depth.png";
+    std::vector<std::string> kept;
+    for (const auto& entry : fs::directory_iterator(dir)) {
+      const std::string name = entry.path().filename().string();
+      if (name.size() > suffix.size() &&
+          name.compare(name.size() - suffix.size(), suffix.size(), suffix) == 0)
+        kept.push_back(name.substr(0, name.size() - suffix.size()));
+    }
+    std::sort(kept.begin(), kept.end());
+    for (std::size_t k = 0; k + std::size_t(cfg_.log.no_pick_frames) < kept.size(); ++k)
+      for (const char* part : {"-depth.png", "-camera.json", "-overlay.png"}) {
+        std::error_code ec;  // a file already gone is no error
+        fs::remove(dir / (kept[k] + part), ec);
+      }
+  } catch (const std::exception& e) {
+    spdlog::warn("no-pick frame: {}", e.what());
+  }
+}
+
 void Service::after_publish() {
   write_overlays();
+  keep_no_pick_frame();
   if (!pick_pending_) return;
   pick_pending_ = false;
   if (const Pose* p = presented()) source_->picked(*p);

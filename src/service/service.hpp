@@ -40,7 +40,8 @@ class Service {
   void publish_status();
   // After the result is published (outside the cycle): every log.overlay_every LOCATEs the
   // integrator's picture of the frame is written, every status.overlay_every LOCATEs it goes to
-  // the status board, and the simulated bin loses the pipe handed out.
+  // the status board, a LOCATE that handed out no pose keeps its frame (log.no_pick_frames), and
+  // the simulated bin loses the pipe handed out.
   void after_publish();
   // Stops a running cycle at its next check (shutdown).
   void cancel_cycles(const std::atomic<bool>* flag) {
@@ -68,6 +69,7 @@ class Service {
   void locate(Clock::time_point trigger);
   void present(int index);
   void write_overlays();
+  void keep_no_pick_frame();
 
   const AppConfig& cfg_;
   std::unique_ptr<FrameSource> source_;
