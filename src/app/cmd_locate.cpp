@@ -32,6 +32,7 @@ Json verification_json(const Verification& v) {
           {"free_space", v.free_space()},
           {"inner_free_space", v.inner_free_space()},
           {"occluded", v.occluded()},
+          {"outside_view", v.outside_view},
           {"side_level", v.side_level()},
           {"side_px", v.side_px},
           {"ends_pinned", v.ends_pinned},
