@@ -135,7 +135,8 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
          return e;
        }(),
        true, CandidateOutcome::not_confirmed, false, false, 0},
-      // Accepted: score = agreement * (1 - occluded), halved when ambiguous.
+      // Accepted: score = agreement * (1 - occluded) * (1 - out of view), halved when ambiguous:
+      // the share of the whole pipe the image confirms.
       {"accepted and pickable", judged(seen(900, 10, 100)), true, CandidateOutcome::accepted, false, true,
        0.81f},
       {"sides drop away", judged(with_sides(seen(900, 0, 0), 100, 29)), true,
@@ -149,40 +150,40 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
       // Out of the view the image checks nothing: that part counts as not confirmed, and the
       // image must still confirm verify_min_agreement of the whole pipe.
       {"a fifth out of the view, the rest confirmed", judged(outside_view(seen(900, 0, 0), 0.2f)), true,
-       CandidateOutcome::accepted, false, true, 0.9f},
+       CandidateOutcome::accepted, false, true, 0.72f},
       {"a fifth out of the view, too little confirmed", judged(outside_view(seen(800, 0, 0), 0.2f)), true,
-       CandidateOutcome::accepted, false, false, 0.8f},
+       CandidateOutcome::accepted, false, false, 0.64f},
       {"a third out of the view", judged(outside_view(seen(850, 0, 0), 0.35f)), true,
-       CandidateOutcome::accepted, false, false, 0.85f},
+       CandidateOutcome::accepted, false, false, 0.5525f},
       // Up to half out of the view where what is in view agrees 0.9, and, where the ends are
       // read, an end is pinned.
       {"a third out of the view, what is in view well seen", judged(outside_view(seen(950, 0, 0), 0.35f)),
-       true, CandidateOutcome::accepted, false, true, 0.95f},
+       true, CandidateOutcome::accepted, false, true, 0.6175f},
       {"six tenths out of the view", judged(outside_view(seen(1000, 0, 0), 0.6f)), true,
-       CandidateOutcome::accepted, false, false, 1.0f},
+       CandidateOutcome::accepted, false, false, 0.4f},
       {"a third out of the view, ends read, none pinned",
        ends_read(judged(outside_view(seen(950, 0, 0), 0.35f)), 0, 0, 0, 0), true, CandidateOutcome::accepted,
-       false, false, 0.95f},
+       false, false, 0.6175f},
       {"a third out of the view, ends read, one pinned",
        ends_read(judged(outside_view(seen(950, 0, 0), 0.35f)), 1, 0, 0, 0), true, CandidateOutcome::accepted,
-       false, true, 0.95f},
+       false, true, 0.6175f},
       // Not for a pose found from a region shorter than a * L: where it lies along what is out of
       // the view, a short piece of its top does not say.
       {"a third out of the view, well seen, from a short region",
        from_short_region(judged(outside_view(seen(950, 0, 0), 0.35f))), true, CandidateOutcome::accepted,
-       false, false, 0.95f},
+       false, false, 0.6175f},
       {"a fifth out of the view, the rest confirmed, from a short region",
        from_short_region(judged(outside_view(seen(900, 0, 0), 0.2f))), true, CandidateOutcome::accepted,
-       false, true, 0.9f},
+       false, true, 0.72f},
       // The tube going on beyond both ends: the pipe there is longer than the pose.
       {"ends read, the tube going on beyond both", ends_read(judged(seen(900, 0, 0)), 0, 2, 0, 0), true,
        CandidateOutcome::accepted, false, false, 0.9f},
       {"ends read, going on beyond one", ends_read(judged(seen(900, 0, 0)), 1, 1, 0, 0), true,
        CandidateOutcome::accepted, false, true, 0.9f},
       {"a tenth under a pipe, a tenth out of the view", judged(outside_view(seen(900, 0, 100), 0.1f)), true,
-       CandidateOutcome::accepted, false, true, 0.81f},
+       CandidateOutcome::accepted, false, true, 0.729f},
       {"a twentieth out of the view", judged(outside_view(seen(900, 0, 0), 0.05f)), true,
-       CandidateOutcome::accepted, false, true, 0.9f},
+       CandidateOutcome::accepted, false, true, 0.855f},
       {"rival about as good: ambiguous", judged_with_rival(seen(900, 0, 0), seen(860, 0, 0)), true,
        CandidateOutcome::accepted, true, false, 0.45f},
       {"rival failing by a hair: still ambiguous", judged_with_rival(seen(700, 0, 0), seen(690, 0, 0)), true,

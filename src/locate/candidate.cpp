@@ -171,8 +171,11 @@ Decision decide(const Evidence& given, const LocateConfig& cfg) {
   // Beyond the paper: a pipe that slides along itself is placed along its length only by an end
   // the image shows; where none is seen, or the tube goes on beyond one, the pose may be slid.
   if (e.ends_must_pin && (e.best.ends_pinned == 0 || e.best.ends_continued > 0)) out.ambiguous = true;
-  out.score =
-      e.best.agreement() * (1.0f - e.best.occluded()) * (out.ambiguous ? kAmbiguousScoreFactor : 1.0f);
+  // The score is the share of the whole pipe the image confirms: what lies under others or out of
+  // the view is not confirmed. A pose checked on all of the pipe goes before one reaching out of
+  // the view that agrees as well where it is seen (its part out of view may lie elsewhere).
+  out.score = e.best.agreement() * (1.0f - e.best.occluded()) * (1.0f - e.best.outside_view) *
+              (out.ambiguous ? kAmbiguousScoreFactor : 1.0f);
   // A pose is handed out only where the image could check it: at most verify_max_occluded of it
   // under something in front, at most verify_max_outside_view of it out of the view, and what
   // the image confirms is still verify_min_agreement of the whole pipe, the part out of the view
