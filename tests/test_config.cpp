@@ -46,6 +46,13 @@ TEST(Config, ErrorsNameFileKeyAndExpectation) {
   EXPECT_DOUBLE_EQ(cfg.locate.scan_step_deg, 2.5);
   EXPECT_EQ(cfg.locate.max_candidates, 8);
   EXPECT_EQ(cfg.model_path, dir.file("pipe.stl"));
+  // max_results 0 (the default): every pose found is reported, at most one per candidate.
+  EXPECT_EQ(cfg.locate.max_results, 0);
+  EXPECT_EQ(cfg.locate.result_cap(), 8);
+  EXPECT_EQ(error_of("[locate]\nmax_results = 5\n"), "");
+  EXPECT_EQ(load_config(dir.file("c.toml")).locate.result_cap(), 5);
+  msg = error_of("[locate]\nmax_results = -1\n");
+  EXPECT_NE(msg.find("locate.max_results"), std::string::npos) << msg;
 }
 
 // [status]: off by default; each key checked with a message naming it.

@@ -245,7 +245,7 @@ void read_locate(Section& s, LocateConfig* c) {
   s.boolean("judge_slides", &c->judge_slides);
   s.boolean("pin_slides_by_ends", &c->pin_slides_by_ends);
   s.integer("max_candidates", &c->max_candidates, 1, 256, "regions");
-  s.integer("max_results", &c->max_results, 1, 256, "poses");
+  s.integer("max_results", &c->max_results, 0, 256, "poses (0: every pose found)");
   s.integer("threads", &c->threads, 1, 64, "threads");
   std::string search = "default";
   s.text("search", &search, {"default", "paper"});

@@ -126,8 +126,9 @@ struct LocateConfig {
   int max_candidates = 24;
   // Of them at most this many shorter than a * L: each costs as much time as a long one.
   int max_short_candidates = 4;
-  int max_results = 16;
+  int max_results = 0;  // poses reported per image; 0: every pose found (at most max_candidates)
   int threads = 2;
+  int result_cap() const { return max_results > 0 ? max_results : max_candidates; }
 };
 
 // The paper's search (IV-B): its six turns in both directions at the measured centre, every one

@@ -126,7 +126,7 @@ const LocateOutput& Locator::locate(const Image<float>& depth, const CameraInfo&
   std::sort(out_.estimates.begin(), out_.estimates.end(), [](const PipeEstimate& a, const PipeEstimate& b) {
     return a.score != b.score ? a.score > b.score : a.candidate < b.candidate;
   });
-  if (int(out_.estimates.size()) > cfg_.max_results) out_.estimates.resize(std::size_t(cfg_.max_results));
+  if (int(out_.estimates.size()) > cfg_.result_cap()) out_.estimates.resize(std::size_t(cfg_.result_cap()));
   out_.times.total_ms = ms_since(t_start);
   return out_;
 }

@@ -21,7 +21,7 @@ struct StageTimes {
 };
 
 struct LocateOutput {
-  std::vector<PipeEstimate> estimates;  // ranked, best first; capacity max_results
+  std::vector<PipeEstimate> estimates;  // ranked, best first; capacity max_candidates
   std::vector<CandidateTrace> traces;   // one per candidate region
   RegionStats regions;
   StageTimes times;

@@ -53,7 +53,7 @@ Service::Service(const AppConfig& cfg, const PipeModel& model, std::unique_ptr<F
   const Intrinsics& k = source_->intrinsics();
   frame_.depth_mm.resize(k.width, k.height, 0.0f);
   frame_.camera.intrinsics = k;
-  ranked_.reserve(std::size_t(cfg.locate.max_results));
+  ranked_.reserve(std::size_t(cfg.locate.result_cap()));
 }
 
 const Pose* Service::presented() const {
@@ -147,7 +147,7 @@ void Service::locate(Clock::time_point trigger) {
     const auto margin = ms_duration(std::min(5.0, 0.1 * cfg_.service.budget_ms));
     const LocateOutput& out = locator_.locate(frame_.depth_mm, frame_.camera, deadline - margin);
     for (const PipeEstimate& e : out.estimates) {
-      if (!e.pickable || int(ranked_.size()) >= cfg_.locate.max_results) continue;
+      if (!e.pickable || int(ranked_.size()) >= cfg_.locate.result_cap()) continue;
       Ranked r;
       r.model_to_cam = e.model_to_cam;
       r.robot = to_robot(e.model_to_cam, robot_from_camera_, grasp_, cfg_.plc.euler);
