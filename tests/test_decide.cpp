@@ -33,6 +33,12 @@ Verification below_floor(Verification v, float share) {
   return v;
 }
 
+// A square of the silhouette, a quarter of the tube wide, seen through entirely.
+Verification seen_through_patch(Verification v) {
+  v.seen_through_patch = true;
+  return v;
+}
+
 // A pipe that slides along itself, its ends judged: `pinned` shown ending, `continued` going on.
 Evidence sliding(Evidence e, int pinned, int continued) {
   e.ends_must_pin = true;
@@ -127,6 +133,9 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
       {"sides level: a smooth blob", judged(with_sides(seen(900, 0, 0), 100, 31)), true,
        CandidateOutcome::not_confirmed, false, false, 0},
       {"a third under the floor", judged(below_floor(seen(900, 0, 0), 0.31f)), true,
+       CandidateOutcome::not_confirmed, false, false, 0},
+      // Little free space in all, but in one place the sensor sees through a square of it.
+      {"a square of it seen through", judged(seen_through_patch(seen(900, 10, 0))), true,
        CandidateOutcome::not_confirmed, false, false, 0},
       {"nothing judged",
        [] {

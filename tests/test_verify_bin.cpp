@@ -108,6 +108,31 @@ TEST(BinAwareVerification, APoseReachingOutOfTheViewSaysHowMuch) {
   EXPECT_EQ(outside_at(edge_mm + 10), 1.0f);  // nearer than the floor, the tube projects farther out
 }
 
+// A pose slid 0.3 D past its pipe's end sees the floor through fewer of its pixels than the
+// free-space check allows, but all of them in one place: a square a quarter of the tube wide is
+// seen through entirely. The true pose and one D/8 to the side (a right pose, refined) see
+// through no such square.
+TEST(BinAwareVerification, APoseOverhangingItsPipeSeesThroughASquare) {
+  const LocatorModel lm = prepare_locator_model(straight_tube(), 8, LocateConfig{});
+  const Scene s = straight_tube_scene(kTubeMm / 2, 0);
+  const Intrinsics& k = s.camera.intrinsics;
+  Image<float> scratch(k.width, k.height, 0.0f);
+  ProjectedMesh projected;
+  projected.reserve(lm.verify_mesh);
+  const auto at = [&](double x_mm, double y_mm) {
+    Pose m2w = Pose::Identity();
+    m2w.translation() = Eigen::Vector3d(-75 + x_mm, y_mm, kTubeMm / 2);
+    const Pose m2c = *s.camera.world_to_cam * m2w;
+    return verify_pose(lm.verify_mesh, lm.verify_winding, m2c, s.depth, k, 7.0f, 0.25f * float(kTubeMm), 0,
+                       &scratch, &projected, hole_side_px(lm, k, m2c));
+  };
+  EXPECT_FALSE(at(0, 0).seen_through_patch);
+  EXPECT_FALSE(at(0, kTubeMm / 8).seen_through_patch);
+  const Verification slid = at(0.3 * kTubeMm, 0);
+  EXPECT_LT(slid.inner_free_space(), LocateConfig{}.verify_max_free_space);
+  EXPECT_TRUE(slid.seen_through_patch);
+}
+
 // A refined pose lies up to a band's width (D/8) to the side of its pipe. The sides are read
 // beyond that band: a 40 mm tube 0.9 m away is 25 pixels wide, its band 3 pixels; moved D/8
 // across, the sides two pixels beyond its rim would fall on the pipe itself on one side.

@@ -33,6 +33,7 @@ Json verification_json(const Verification& v) {
           {"inner_free_space", v.inner_free_space()},
           {"occluded", v.occluded()},
           {"outside_view", v.outside_view},
+          {"seen_through_patch", v.seen_through_patch},
           {"side_level", v.side_level()},
           {"side_px", v.side_px},
           {"ends_pinned", v.ends_pinned},

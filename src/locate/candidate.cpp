@@ -98,6 +98,8 @@ constexpr Check kChecks[] = {
      [](const Evidence& e, const LocateConfig& cfg) {
        return !(e.best.inner_free_space() > float(cfg.verify_max_free_space));
      }},
+    {CandidateStage::hypotheses, CandidateOutcome::not_confirmed,
+     [](const Evidence& e, const LocateConfig&) { return !e.best.seen_through_patch; }},
     // Beyond the paper: a smooth blob fits a pipe's top as well as a pipe does, but a pipe's sides
     // drop away from it (too few side pixels say nothing: a pipe among shadows).
     {CandidateStage::hypotheses, CandidateOutcome::not_confirmed,
@@ -356,7 +358,7 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
     return verify_pose(lm.verify_mesh, lm.verify_winding, model_to_cam, ctx.depth, ctx.camera,
                        float(cfg.verify_tolerance_mm), float(cfg.side_drop_of_d) * lm.tube_d_mm,
                        free_space_band_px(cfg, lm, ctx.camera, model_to_cam), &buf->scratch_depth,
-                       &buf->scratch_mesh);
+                       &buf->scratch_mesh, hole_side_px(lm, ctx.camera, model_to_cam));
   };
   // Refines a hypothesis on observed points (the region's; a twin's, those the best explains),
   // has the image judge it, and keeps the best two that are more than ambiguity_pose_mm apart.

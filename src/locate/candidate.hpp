@@ -127,6 +127,13 @@ inline int free_space_band_px(const LocateConfig& cfg, const LocatorModel& lm, c
   const double z = (model_to_cam * lm.centroid.cast<double>()).z();
   return z > 0 ? int(cfg.free_space_band_of_d * lm.tube_d_mm * k.fx / z + 0.5) : 0;
 }
+// The side of a square of the silhouette seen through that rules a pose out: a quarter of the
+// tube's width at the model's centroid, at least 3 px (single pixels and pairs see through at
+// edges and in noise).
+inline int hole_side_px(const LocatorModel& lm, const Intrinsics& k, const Pose& model_to_cam) {
+  const double z = (model_to_cam * lm.centroid.cast<double>()).z();
+  return z > 0 ? std::max(3, int(0.25 * lm.tube_d_mm * k.fx / z + 0.5)) : 3;
+}
 // How well the image confirms a hypothesis: what ranks hypotheses and finds ambiguities. Two
 // hypotheses of one region are compared on every pixel, the rim band included: where a
 // near-symmetric pipe and its twin differ by a few millimetres, the band is what tells them apart.

@@ -22,7 +22,8 @@ float drawn_mm(const Image<float>& render, const PixelBox& box, int x, int y) {
 
 Verification verify_pose(const Mesh& mesh, Winding winding, const Pose& model_to_cam,
                          const Image<float>& depth, const Intrinsics& k, float tol, float side_drop_mm,
-                         int free_band_px, Image<float>* scratch, ProjectedMesh* projected) {
+                         int free_band_px, Image<float>* scratch, ProjectedMesh* projected,
+                         int hole_side_px) {
   Verification v;
   v.box = render_depth_in_box(mesh, model_to_cam, k, scratch, projected, winding);
   const PixelBox& box = v.box;
@@ -78,6 +79,26 @@ Verification verify_pose(const Mesh& mesh, Winding winding, const Pose& model_to
       else
         ++v.agree_px;
     }
+  // Beyond the paper: free space is judged as a share, and a pose across a gap (the hole of a
+  // coil's loop, the space between two pipes) sees through a small share of its pixels, but all
+  // of them in one place. A square hole_side_px wide seen through entirely rules the pipe out
+  // there; right poses see through scattered pixels and strips along their rims. Skipped where
+  // fewer pixels inside the rim were seen through than the square holds.
+  if (hole_side_px > 0 && v.free_space_px >= hole_side_px * hole_side_px) {
+    const auto seen_through = [&](int x, int y) {
+      if (x > box.x1 || y > box.y1) return false;
+      const float zm = scratch->at(x, y), zo = depth.at(x, y);
+      return zm > 0 && zo > zm + tol;
+    };
+    for (int y = box.y0; y <= box.y1 && !v.seen_through_patch; ++y)
+      for (int x = box.x0; x <= box.x1 && !v.seen_through_patch; ++x) {
+        if (!seen_through(x, y)) continue;
+        bool all = true;
+        for (int dy = 0; dy < hole_side_px && all; ++dy)
+          for (int dx = 0; dx < hole_side_px && all; ++dx) all = seen_through(x + dx, y + dy);
+        v.seen_through_patch = all;
+      }
+  }
   return v;
 }
 

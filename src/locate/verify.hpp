@@ -37,6 +37,9 @@ struct Verification {
   float side_level() const { return side_px ? float(side_level_px) / float(side_px) : 0.f; }
   float below_floor = 0;  // share of the model more than kBelowFloorOfD * D under the lowest surface seen
   float outside_view = 0;  // share of the model's vertices outside the image: seen nowhere
+  // A square of the silhouette, hole_side_px wide, that the sensor saw through entirely: the pipe
+  // cannot be there (a pose across a gap, over the hole of a loop).
+  bool seen_through_patch = false;
   PixelBox box;            // the pixels the model was drawn in (the scratch image holds its depths)
   // The tube's two ends (judge_ends): pinned where the image shows it ends there (the surface
   // beyond lies lower), continued where the tube's surface goes on beyond it (a pose slid along
@@ -54,10 +57,11 @@ constexpr int kMinSidePx = 20;
 // reserved for the mesh. winding: of the mesh, if closed (its back faces are then not drawn).
 // side_drop_mm: how far beyond its silhouette a pipe's surroundings lie at least (a share of D).
 // free_band_px: the pixels this close inside the rim are left out of inner_free_space().
+// hole_side_px: the side of a square seen through that sets seen_through_patch (0: not looked for).
 Verification verify_pose(const Mesh& mesh, Winding winding, const Pose& model_to_cam,
                          const Image<float>& depth_mm, const Intrinsics& k, float tolerance_mm,
                          float side_drop_mm, int free_band_px, Image<float>* scratch,
-                         ProjectedMesh* projected);
+                         ProjectedMesh* projected, int hole_side_px = 0);
 
 // Beyond the paper: are the tube's ends where the image shows them? Beyond each end of the
 // centreline (model frame, ordered from one end to the other; tube diameter d_mm), the surface a
