@@ -109,6 +109,37 @@ TEST(CalibrateBin, FindsFloorAndWallsOfSimulatedBins) {
   }
 }
 
+// A camera 0.45 m above a bin twice as wide as it sees: not four walls in view, and the bin is
+// refused naming --floor-only; with it, the floor's frame alone (normal within 0.5 deg, the camera
+// at its true height) and no region of interest in the TOML.
+TEST(CalibrateBin, ACameraSeeingPartOfTheBinGivesTheFloorAlone) {
+  const PipeModel model = coarse_model("sbend");
+  std::mt19937 rng(17);
+  SceneParams params;
+  params.pile.pipes = 10;
+  params.pile.bin.inner_x_mm *= 2;
+  params.pile.bin.inner_y_mm *= 2;
+  const std::vector<Pose> pile = build_pile(model, params.pile, rng);
+  const Pose truth = camera_at(450, 10, 30, Eigen::Vector3d(40, -20, 0));
+  const Image<float> depth = bin_frame(model, pile, truth, params, rng);
+  const BinCalib walls = calibrate_bin(depth, params.intrinsics);
+  ASSERT_FALSE(walls.ok);
+  EXPECT_NE(walls.error.find("--floor-only"), std::string::npos) << walls.error;
+  BinCalibParams floor_only;
+  floor_only.floor_only = true;
+  const BinCalib calib = calibrate_bin(depth, params.intrinsics, floor_only);
+  ASSERT_TRUE(calib.ok) << calib.error;
+  EXPECT_FALSE(calib.walls);
+  const double normal_deg =
+      std::acos(std::clamp(truth.linear().col(2).dot(calib.world_to_cam.linear().col(2)), -1.0, 1.0)) / kDeg;
+  EXPECT_LT(normal_deg, 0.5);
+  // The camera's height above the floor: the same in both frames.
+  EXPECT_NEAR(calib.world_to_cam.inverse().translation().z(), truth.inverse().translation().z(), 3.0);
+  const std::string toml = bin_calib_toml(calib);
+  EXPECT_NE(toml.find("world_to_cam"), std::string::npos);
+  EXPECT_EQ(toml.find("roi_min_mm"), std::string::npos) << toml;
+}
+
 TEST(CalibrateBin, RandomDepthsHaveNoFloor) {
   const Intrinsics k;
   Image<float> depth(k.width, k.height, 0.0f);

@@ -18,6 +18,7 @@ void add_calibrate_bin(CLI::App& app) {
     std::string depth, camera;
     int im_id = -1;
     double margin_mm = 5;
+    bool floor_only = false;
   };
   auto opt = std::make_shared<Options>();
   auto* cmd = app.add_subcommand("calibrate-bin",
@@ -29,6 +30,9 @@ void add_calibrate_bin(CLI::App& app) {
   cmd->add_option("--im-id", opt->im_id, "image id in the camera file (default: its first entry)");
   cmd->add_option("--margin-mm", opt->margin_mm, "region of interest this far inside the walls (mm)")
       ->check(CLI::Range(0.0, 200.0));
+  cmd->add_flag("--floor-only", opt->floor_only,
+                "the floor's frame alone, walls not looked for (a camera that sees part of the bin); no "
+                "region of interest");
   cmd->callback([opt] {
     const auto cameras = read_scene_camera(opt->camera);
     if (cameras.empty()) throw IoError("'" + opt->camera + "': holds no camera");
@@ -40,6 +44,7 @@ void add_calibrate_bin(CLI::App& app) {
     const Intrinsics k = cam.intrinsics;
     BinCalibParams params;
     params.roi_margin_mm = opt->margin_mm;
+    params.floor_only = opt->floor_only;
     const BinCalib calib = calibrate_bin(depth, k, params);
     if (!calib.ok) {
       spdlog::error("calibrate-bin: '{}': {}", opt->depth, calib.error);

@@ -141,6 +141,14 @@ BinCalib calibrate_bin(const Image<float>& depth, const Intrinsics& k, const Bin
     if (std::abs(floor.distance(p)) <= params.plane.inlier_mm) origin0 += p;
   origin0 /= floor.inliers;
   origin0 -= z * floor.distance(origin0);
+  if (params.floor_only) {
+    out.world_to_cam.linear().col(0) = x0;
+    out.world_to_cam.linear().col(1) = y0;
+    out.world_to_cam.linear().col(2) = z;
+    out.world_to_cam.translation() = origin0;
+    out.ok = true;
+    return out;
+  }
   std::vector<FloorPoint> high;
   for (const Eigen::Vector3d& p : pts) {
     const Eigen::Vector3d q = p - origin0;
@@ -177,7 +185,9 @@ BinCalib calibrate_bin(const Image<float>& depth, const Intrinsics& k, const Bin
   }
   const double a_lo = faces[0], a_hi = faces[1], b_lo = faces[2], b_hi = faces[3];
   if (std::isnan(a_lo) || std::isnan(a_hi) || std::isnan(b_lo) || std::isnan(b_hi)) {
-    out.error = "floor found, but not four walls around it (is the whole bin in view?)";
+    out.error =
+        "floor found, but not four walls around it (is the whole bin in view? --floor-only gives the "
+        "floor's frame alone)";
     return out;
   }
   const Eigen::Vector3d centre = origin0 + 0.5 * (a_lo + a_hi) * ea + 0.5 * (b_lo + b_hi) * eb;
@@ -189,7 +199,7 @@ BinCalib calibrate_bin(const Image<float>& depth, const Intrinsics& k, const Bin
     why.precision(1);
     why << "floor found, but the walls found around it leave no interior (" << la << " x " << lb
         << " mm between their inner faces, " << params.roi_margin_mm
-        << " mm margin each side): is the whole bin in view?";
+        << " mm margin each side): is the whole bin in view? (--floor-only gives the floor's frame alone)";
     out.error = why.str();
     return out;
   }
@@ -208,6 +218,7 @@ BinCalib calibrate_bin(const Image<float>& depth, const Intrinsics& k, const Bin
     out.roi_min_mm[i] = -half;
     out.roi_max_mm[i] = half;
   }
+  out.walls = true;
   out.ok = true;
   return out;
 }
@@ -220,9 +231,13 @@ std::string bin_calib_toml(const BinCalib& b) {
     << " valid pixels (" << 100 * b.floor_share << " % inliers), residual " << std::setprecision(2)
     << b.floor_rms_mm << " mm RMS\n";
   s.precision(1);
-  s << "# bin interior " << b.interior_x_mm << " x " << b.interior_y_mm
-    << " mm between the walls' inner faces; frame: Z up, X along the longer side, origin on the floor at "
-       "the centre\n";
+  if (b.walls)
+    s << "# bin interior " << b.interior_x_mm << " x " << b.interior_y_mm
+      << " mm between the walls' inner faces; frame: Z up, X along the longer side, origin on the floor at "
+         "the centre\n";
+  else
+    s << "# the floor alone (walls not looked for): frame Z up, X along the image's x, origin on the floor "
+         "at the centroid of what is in view; no region of interest\n";
   s << "[source.openni2]\nworld_to_cam = [";
   const Eigen::Matrix4d m = b.world_to_cam.matrix();
   for (int i = 0; i < 4; ++i) {
@@ -234,6 +249,7 @@ std::string bin_calib_toml(const BinCalib& b) {
     }
   }
   s << "]\n";
+  if (!b.walls) return s.str();
   s.precision(1);
   s << "[locate]\nroi_min_mm = [" << b.roi_min_mm[0] << ", " << b.roi_min_mm[1] << "]\n";
   s << "roi_max_mm = [" << b.roi_max_mm[0] << ", " << b.roi_max_mm[1] << "]\n";

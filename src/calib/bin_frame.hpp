@@ -21,6 +21,9 @@ struct BinCalibParams {
   double wall_edge_share = 0.5;    // a wall's inner edge: where the count of high points per
                                    // 1 mm strip first reaches this share of its side's peak
   double roi_margin_mm = 5;        // the region of interest stays this far inside the walls
+  // The walls not looked for (a camera that sees only part of the bin): world_to_cam from the
+  // floor alone, origin at the floor's centroid in view, X along the image's x; no region of interest.
+  bool floor_only = false;
   BinCalibParams() {
     plane.inlier_mm = 10;
     plane.iterations = 500;
@@ -36,6 +39,7 @@ struct BinCalib {
   double floor_rms_mm = 0;  // residual of the floor points about the plane
   double floor_share = 0;   // floor inliers / valid pixels
   int floor_points = 0, valid_points = 0;
+  bool walls = false;  // the walls were found: the interior and the region of interest hold
   double interior_x_mm = 0, interior_y_mm = 0;  // between the walls' inner faces
   double roi_min_mm[2] = {0, 0}, roi_max_mm[2] = {0, 0};
 };
