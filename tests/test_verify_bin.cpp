@@ -84,28 +84,35 @@ TEST(BinAwareVerification, APipesSidesDropAwayASmoothBlobsDoNot) {
   EXPECT_GT(blob.side_level(), LocateConfig{}.verify_max_side_level);
 }
 
+// The straight tube of straight_tube_scene() lying on the floor, and verify_pose() of the model
+// moved along world X by x_mm (the tube from x_mm to x_mm + 150) and across by y_mm.
+struct TubeOnFloor {
+  LocatorModel lm = prepare_locator_model(straight_tube(), 8, LocateConfig{});
+  Scene s = straight_tube_scene(kTubeMm / 2, 0);
+  Image<float> scratch{s.camera.intrinsics.width, s.camera.intrinsics.height, 0.0f};
+  ProjectedMesh projected;
+  TubeOnFloor() { projected.reserve(lm.verify_mesh); }
+  Verification at(double x_mm, double y_mm = 0, bool look_for_holes = false) {
+    Pose m2w = Pose::Identity();
+    m2w.translation() = Eigen::Vector3d(x_mm, y_mm, kTubeMm / 2);
+    const Pose m2c = *s.camera.world_to_cam * m2w;
+    const Intrinsics& k = s.camera.intrinsics;
+    return verify_pose(lm.verify_mesh, lm.verify_winding, m2c, s.depth, k, 7.0f, 0.25f * float(kTubeMm), 0,
+                       &scratch, &projected, look_for_holes ? hole_side_px(lm, k, m2c) : 0);
+  }
+};
+
 // A pose reaching out of the view: the image checks nothing of the part outside it, which
 // verify_pose() gives as the share of the model's vertices outside the image (decide() counts it
 // as unseen, like the part under another pipe).
 TEST(BinAwareVerification, APoseReachingOutOfTheViewSaysHowMuch) {
-  const LocatorModel lm = prepare_locator_model(straight_tube(), 8, LocateConfig{});
-  const Scene s = straight_tube_scene(kTubeMm / 2, 0);
-  const Intrinsics& k = s.camera.intrinsics;
-  Image<float> scratch(k.width, k.height, 0.0f);
-  ProjectedMesh projected;
-  projected.reserve(lm.verify_mesh);
-  const auto outside_at = [&](double x_mm) {  // the tube from x_mm to x_mm + 150 along world X
-    Pose m2w = Pose::Identity();
-    m2w.translation() = Eigen::Vector3d(x_mm, 0, kTubeMm / 2);
-    return verify_pose(lm.verify_mesh, lm.verify_winding, *s.camera.world_to_cam * m2w, s.depth, k, 7.0f,
-                       0.25f * float(kTubeMm), 0, &scratch, &projected)
-        .outside_view;
-  };
+  TubeOnFloor t;
+  const Intrinsics& k = t.s.camera.intrinsics;
   // The image's right edge on the floor, 900 mm below the camera.
   const double edge_mm = (k.width - 1 - k.cx) / k.fx * kCameraHeightMm;
-  EXPECT_EQ(outside_at(-75), 0.0f);
-  EXPECT_NEAR(outside_at(edge_mm - 75), 0.5, 0.1);
-  EXPECT_EQ(outside_at(edge_mm + 10), 1.0f);  // nearer than the floor, the tube projects farther out
+  EXPECT_EQ(t.at(-75).outside_view, 0.0f);
+  EXPECT_NEAR(t.at(edge_mm - 75).outside_view, 0.5, 0.1);
+  EXPECT_EQ(t.at(edge_mm + 10).outside_view, 1.0f);  // nearer than the floor, the tube projects farther out
 }
 
 // A pose slid 0.3 D past its pipe's end sees the floor through fewer of its pixels than the
@@ -113,22 +120,10 @@ TEST(BinAwareVerification, APoseReachingOutOfTheViewSaysHowMuch) {
 // seen through entirely. The true pose and one D/8 to the side (a right pose, refined) see
 // through no such square.
 TEST(BinAwareVerification, APoseOverhangingItsPipeSeesThroughASquare) {
-  const LocatorModel lm = prepare_locator_model(straight_tube(), 8, LocateConfig{});
-  const Scene s = straight_tube_scene(kTubeMm / 2, 0);
-  const Intrinsics& k = s.camera.intrinsics;
-  Image<float> scratch(k.width, k.height, 0.0f);
-  ProjectedMesh projected;
-  projected.reserve(lm.verify_mesh);
-  const auto at = [&](double x_mm, double y_mm) {
-    Pose m2w = Pose::Identity();
-    m2w.translation() = Eigen::Vector3d(-75 + x_mm, y_mm, kTubeMm / 2);
-    const Pose m2c = *s.camera.world_to_cam * m2w;
-    return verify_pose(lm.verify_mesh, lm.verify_winding, m2c, s.depth, k, 7.0f, 0.25f * float(kTubeMm), 0,
-                       &scratch, &projected, hole_side_px(lm, k, m2c));
-  };
-  EXPECT_FALSE(at(0, 0).seen_through_patch);
-  EXPECT_FALSE(at(0, kTubeMm / 8).seen_through_patch);
-  const Verification slid = at(0.3 * kTubeMm, 0);
+  TubeOnFloor t;
+  EXPECT_FALSE(t.at(-75, 0, true).seen_through_patch);
+  EXPECT_FALSE(t.at(-75, kTubeMm / 8, true).seen_through_patch);
+  const Verification slid = t.at(-75 + 0.3 * kTubeMm, 0, true);
   EXPECT_LT(slid.inner_free_space(), LocateConfig{}.verify_max_free_space);
   EXPECT_TRUE(slid.seen_through_patch);
 }
