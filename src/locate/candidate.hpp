@@ -121,18 +121,20 @@ inline float pursued_residual_mm(const LocateConfig& cfg, float tube_d_mm, float
   const float r_th = residual_max_mm(cfg, tube_d_mm);
   return least_cost_mm <= r_th ? r_th : float(std::max(1.0, cfg.residual_rescue_of_rth)) * r_th;
 }
-// The free-space band of verify_pose() in pixels at the distance of the model's centroid.
+// The tube's width in pixels at the distance of the model's centroid (0 behind the camera).
+inline double tube_px(const LocatorModel& lm, const Intrinsics& k, const Pose& model_to_cam) {
+  const double z = (model_to_cam * lm.centroid.cast<double>()).z();
+  return z > 0 ? lm.tube_d_mm * k.fx / z : 0;
+}
+// The free-space band of verify_pose() in pixels.
 inline int free_space_band_px(const LocateConfig& cfg, const LocatorModel& lm, const Intrinsics& k,
                               const Pose& model_to_cam) {
-  const double z = (model_to_cam * lm.centroid.cast<double>()).z();
-  return z > 0 ? int(cfg.free_space_band_of_d * lm.tube_d_mm * k.fx / z + 0.5) : 0;
+  return int(cfg.free_space_band_of_d * tube_px(lm, k, model_to_cam) + 0.5);
 }
 // The side of a square of the silhouette seen through that rules a pose out: a quarter of the
-// tube's width at the model's centroid, at least 3 px (single pixels and pairs see through at
-// edges and in noise).
+// tube's width, at least 3 px (single pixels and pairs see through at edges and in noise).
 inline int hole_side_px(const LocatorModel& lm, const Intrinsics& k, const Pose& model_to_cam) {
-  const double z = (model_to_cam * lm.centroid.cast<double>()).z();
-  return z > 0 ? std::max(3, int(0.25 * lm.tube_d_mm * k.fx / z + 0.5)) : 3;
+  return std::max(3, int(0.25 * tube_px(lm, k, model_to_cam) + 0.5));
 }
 // How well the image confirms a hypothesis: what ranks hypotheses and finds ambiguities. Two
 // hypotheses of one region are compared on every pixel, the rim band included: where a

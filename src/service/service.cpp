@@ -194,15 +194,18 @@ void Service::publish_status() {
   board_->publish_command(record_, result_.index, poses, n);
 }
 
-// The integrator's picture of the last LOCATE: drawn once when the log or the status page wants it.
+// The integrator's picture of the last LOCATE: drawn once when the log, the status page or the
+// no-pick record wants it.
 void Service::write_overlays() {
   if (record_.command != std::uint16_t(reg::Command::locate) || record_.grab != GrabStatus::ok) return;
   auto due = [this](int every) { return every > 0 && cycles_ % std::uint32_t(every) == 0; };
   const bool to_file = due(cfg_.log.overlay_every);
   const bool to_board = board_ && cfg_.status.enabled && due(cfg_.status.overlay_every);
-  if (!to_file && !to_board) return;
+  const bool no_pick = cfg_.log.no_pick_frames > 0 && ranked_.empty();
+  if (!to_file && !to_board && !no_pick) return;
   try {
     const Image<Rgb> overlay = draw_locate_overlay(locator_, frame_.depth_mm, frame_.camera);
+    if (no_pick) keep_no_pick_frame(overlay);
     if (to_file) {
       // Written aside and renamed, so a viewer never catches half a file.
       const std::string path = (std::filesystem::path(cfg_.log.dir) / "overlay-latest.png").string();
@@ -222,10 +225,7 @@ void Service::write_overlays() {
 // handed out no pose keep their depth frame and camera (located again with `pipeloc locate
 // --depth F-depth.png --camera F-camera.json`) and the overlay, in log.dir/no-pick/. Names start
 // with the UTC time, so they sort oldest first; older ones are removed.
-void Service::keep_no_pick_frame() {
-  if (cfg_.log.no_pick_frames <= 0 || record_.command != std::uint16_t(reg::Command::locate) ||
-      record_.grab != GrabStatus::ok || !ranked_.empty())
-    return;
+void Service::keep_no_pick_frame(const Image<Rgb>& overlay) {
   namespace fs = std::filesystem;
   try {
     const fs::path dir = fs::path(cfg_.log.dir) / "no-pick";
@@ -239,7 +239,7 @@ void Service::keep_no_pick_frame() {
     const std::string base = (dir / stem).string();
     write_depth_png(base + "-depth.png", to_raw_depth(frame_.depth_mm, frame_.camera.depth_scale));
     write_json(base + "-camera.json", Json{{"0", camera_to_json(frame_.camera)}});
-    write_rgb_png(base + "-overlay.png", draw_locate_overlay(locator_, frame_.depth_mm, frame_.camera));
+    write_rgb_png(base + "-overlay.png", overlay);
     const std::string suffix = "-depth.png";
     std::vector<std::string> kept;
     for (const auto& entry : fs::directory_iterator(dir)) {
@@ -261,7 +261,6 @@ void Service::keep_no_pick_frame() {
 
 void Service::after_publish() {
   write_overlays();
-  keep_no_pick_frame();
   if (!pick_pending_) return;
   pick_pending_ = false;
   if (const Pose* p = presented()) source_->picked(*p);

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "config/config_file.hpp"
+#include "io/png.hpp"
 #include "locate/locator.hpp"
 #include "plc/register_map.hpp"
 #include "service/cycle.hpp"
@@ -69,7 +70,7 @@ class Service {
   void locate(Clock::time_point trigger);
   void present(int index);
   void write_overlays();
-  void keep_no_pick_frame();
+  void keep_no_pick_frame(const Image<Rgb>& overlay);
 
   const AppConfig& cfg_;
   std::unique_ptr<FrameSource> source_;

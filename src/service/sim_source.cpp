@@ -1,6 +1,5 @@
 #include "service/sim_source.hpp"
 
-#include <cmath>
 #include <cstdio>
 
 #include "score/mssd.hpp"
@@ -73,8 +72,7 @@ GrabStatus SimSource::grab(Clock::time_point, Clock::time_point, Frame* out) {
   apply_sensor_noise(view_, params_.intrinsics, params_.sensor, int(pile_.size()), rng_, &out->depth_mm);
   // In the sensor's 16-bit units, as a real sensor (and a simulated dataset's PNG) reports it.
   out->camera.depth_scale = 1.0;
-  for (float& z : out->depth_mm.pixels)
-    z = float(std::round(z / out->camera.depth_scale) * out->camera.depth_scale);
+  round_to_raw_units(&out->depth_mm, out->camera.depth_scale);
   out->camera.intrinsics = params_.intrinsics;
   out->camera.world_to_cam = world_to_cam_;
   out->captured = Clock::now();

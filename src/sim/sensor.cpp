@@ -135,13 +135,21 @@ Image<float> apply_sensor_model(const DepthTarget& cam, const DepthTarget& proj,
   return out;
 }
 
+namespace {
+double raw_units(float mm, double depth_scale) {
+  return std::clamp(std::round(mm / depth_scale), 0.0, 65535.0);
+}
+}  // namespace
+
 Image<std::uint16_t> to_raw_depth(const Image<float>& depth_mm, double depth_scale) {
   Image<std::uint16_t> raw(depth_mm.width, depth_mm.height, 0);
-  for (std::size_t i = 0; i < raw.pixels.size(); ++i) {
-    const double v = std::round(depth_mm.pixels[i] / depth_scale);
-    raw.pixels[i] = std::uint16_t(std::clamp(v, 0.0, 65535.0));
-  }
+  for (std::size_t i = 0; i < raw.pixels.size(); ++i)
+    raw.pixels[i] = std::uint16_t(raw_units(depth_mm.pixels[i], depth_scale));
   return raw;
+}
+
+void round_to_raw_units(Image<float>* depth_mm, double depth_scale) {
+  for (float& z : depth_mm->pixels) z = float(raw_units(z, depth_scale) * depth_scale);
 }
 
 }  // namespace pipeloc

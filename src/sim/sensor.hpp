@@ -69,5 +69,7 @@ Image<float> apply_sensor_model(const DepthTarget& camera, const DepthTarget& pr
 
 // Depth in mm to raw 16-bit PNG units.
 Image<std::uint16_t> to_raw_depth(const Image<float>& depth_mm, double depth_scale);
+// The same units, kept in mm: the depth as a sensor reports it (in place).
+void round_to_raw_units(Image<float>* depth_mm, double depth_scale);
 
 }  // namespace pipeloc
