@@ -1,7 +1,9 @@
 """Shared pieces of the PLC-side tests: start `pipeloc serve` on the sim source with a config of
 the test's own; the PLC side itself lives in tools/pipeloc_plc.py (also used by tools/plc-client)."""
+import atexit
 import json
 import os
+import shutil
 import signal
 import socket
 import subprocess
@@ -13,6 +15,15 @@ sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."
 from pipeloc_plc import *  # noqa: E402,F401,F403
 
 
+def scratch_dir(prefix):
+    """A temporary folder removed when the test script ends; PIPELOC_KEEP_TEST_DIRS=1 keeps it to look
+    into (each test's failure message already holds the service's output)."""
+    d = tempfile.mkdtemp(prefix=prefix)
+    if os.environ.get("PIPELOC_KEEP_TEST_DIRS") != "1":
+        atexit.register(shutil.rmtree, d, True)
+    return d
+
+
 class Service:
     """`pipeloc serve` in a temporary folder with the given TOML sections added."""
 
@@ -20,7 +31,7 @@ class Service:
                  plc_toml=""):
         self.binary = binary
         self.port = port
-        self.dir = tempfile.mkdtemp(prefix="pipeloc-plc-test-")
+        self.dir = scratch_dir("pipeloc-plc-test-")
         self.truth = os.path.join(self.dir, "truth.jsonl")
         self.stl = os.path.join(self.dir, "sbend.stl")
         subprocess.run([binary, "make-pipe", "--preset", "sbend", "--ascii", "--out", self.stl], check=True,

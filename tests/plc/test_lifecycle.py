@@ -8,11 +8,10 @@ import signal
 import socket
 import subprocess
 import sys
-import tempfile
 import time
 import unittest
 
-from plc_harness import BUSY, LOCATE, STATUS, Plc, Service
+from plc_harness import BUSY, LOCATE, STATUS, Plc, Service, scratch_dir
 
 BINARY, PORT = sys.argv[1], int(sys.argv[2])
 # A sanitizer build runs the service many times slower (ThreadSanitizer about 30 times: a SIGTERM
@@ -21,7 +20,7 @@ SLOWDOWN = float(os.environ.get("PIPELOC_TEST_SLOWDOWN", "1"))
 
 
 def serve_with(config_text, *args, timeout=60):
-    d = tempfile.mkdtemp(prefix="pipeloc-life-")
+    d = scratch_dir("pipeloc-life-")
     path = os.path.join(d, "c.toml")
     with open(path, "w") as f:
         f.write(config_text)
@@ -75,7 +74,7 @@ class StartUp(unittest.TestCase):
 
 class Record(unittest.TestCase):
     def test_record_writes_a_dataset_eval_bop_reads(self):
-        d = tempfile.mkdtemp(prefix="pipeloc-record-")
+        d = scratch_dir("pipeloc-record-")
         out = subprocess.run([BINARY, "record", "--frames", "3", "--out", d], capture_output=True, text=True,
                              timeout=120)
         self.assertEqual(out.returncode, 0, out.stdout + out.stderr)
@@ -99,7 +98,7 @@ class Record(unittest.TestCase):
 
 class Running(unittest.TestCase):
     def test_systemd_notify_and_sigterm_during_a_cycle(self):
-        notify_path = os.path.join(tempfile.mkdtemp(prefix="pipeloc-notify-"), "notify.sock")
+        notify_path = os.path.join(scratch_dir("pipeloc-notify-"), "notify.sock")
         sock = socket.socket(socket.AF_UNIX, socket.SOCK_DGRAM)
         sock.bind(notify_path)
         sock.settimeout(30)
@@ -142,7 +141,7 @@ class Running(unittest.TestCase):
             sock.close()
 
     def test_sighup_stops_cleanly_with_stopping(self):
-        notify_path = os.path.join(tempfile.mkdtemp(prefix="pipeloc-notify-"), "notify.sock")
+        notify_path = os.path.join(scratch_dir("pipeloc-notify-"), "notify.sock")
         sock = socket.socket(socket.AF_UNIX, socket.SOCK_DGRAM)
         sock.bind(notify_path)
         sock.settimeout(30)

@@ -10,7 +10,6 @@ import shutil
 import struct
 import subprocess
 import sys
-import tempfile
 import time
 import unittest
 import urllib.request
@@ -179,7 +178,7 @@ refresh_s = 2
     def test_page_in_headless_chromium(self):
         chromium = shutil.which("chromium") or shutil.which("chromium-browser")
         self.assertIsNotNone(chromium, "chromium not installed (tools/setup installs it)")
-        work = tempfile.mkdtemp(prefix="pipeloc-status-chromium-")
+        work = scratch_dir("pipeloc-status-chromium-")
         common = [chromium, "--headless", "--no-sandbox", "--disable-gpu", "--hide-scrollbars",
                   "--user-data-dir=" + os.path.join(work, "profile"), "--window-size=1280,1000"]
         dom = subprocess.run(common + ["--dump-dom", URL + "/"], capture_output=True, text=True, timeout=120).stdout
@@ -210,7 +209,6 @@ refresh_s = 2
         pick = sum(rows[y][x] == (255, 30, 30) for y in range(y0, min(h, y0 + 80)) for x in range(x0, min(w, x0 + 180)))
         self.assertGreater(pick, 10, "the legend has no PICK colour")
         print(f"screenshot {w}x{h}: overlay legend at x {x0}, y {y0}, {pick} PICK pixels ({shot})")
-        shutil.rmtree(os.path.join(work, "profile"), ignore_errors=True)
 
 
 if __name__ == "__main__":
