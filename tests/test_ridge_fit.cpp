@@ -113,6 +113,33 @@ TEST(PoseDistance, ExactUpToTheBoundAndBeyondItPastIt) {
   }
 }
 
+// Beyond the paper: a hypothesis is a rival of the best only where the two share the tube. The
+// same pose shares all of it, the pose moved a diameter along its first leg a part, the pose moved two
+// diameters beside it (a neighbouring pipe) none.
+TEST(PoseDistance, SharedTubeIsTheShareOfTheCentrelineWhereTheOtherPoseHasIt) {
+  LocateConfig cfg;
+  const LocatorModel lm = prepare_locator_model(preset_model("sbend"), 8, cfg);
+  const auto& c = lm.centreline_points;
+  ASSERT_GE(c.size(), 16u);
+  const float d = lm.tube_d_mm;
+  Pose a = Pose::Identity();
+  a.linear() = Eigen::AngleAxisd(0.7, Eigen::Vector3d(0.3, -0.2, 1).normalized()).toRotationMatrix();
+  a.translation() = Eigen::Vector3d(40, -25, 880);
+  EXPECT_FLOAT_EQ(shared_tube(lm, a, a), 1.0f);
+  // Moved a diameter along its first leg: that leg stays in the tube, the bends leave it.
+  Pose slid = a;
+  slid.translation() += a.linear() * ((c[1] - c[0]).normalized() * d).cast<double>();
+  const float slid_share = shared_tube(lm, slid, a);
+  EXPECT_GE(slid_share, kRivalMinSharedTube);
+  EXPECT_LT(slid_share, 1.0f);
+  // Beside it: the whole centreline moved two diameters off its own plane.
+  const Eigen::Vector3f normal = (c[c.size() / 4] - c[0]).cross(c[3 * c.size() / 4] - c[0]).normalized();
+  Pose beside = a;
+  beside.translation() += a.linear() * (2 * d * normal).cast<double>();
+  EXPECT_EQ(shared_tube(lm, beside, a), 0.0f);
+  EXPECT_LT(shared_tube(lm, beside, a), kRivalMinSharedTube);
+}
+
 // IV-B: from the paper's ranges (about the axis up to +-70 degrees, 3 cm along it) the ridge
 // ICP with refinement converges on the pipe.
 TEST(RidgeIcp, ConvergesFromThePapersRanges) {

@@ -360,6 +360,13 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
                        free_space_band_px(cfg, lm, ctx.camera, model_to_cam), &buf->scratch_depth,
                        &buf->scratch_mesh, hole_side_px(lm, ctx.camera, model_to_cam));
   };
+  // Two readings of one pipe: more than ambiguity_pose_mm apart, and sharing at least
+  // kRivalMinSharedTube of the tube. A hypothesis that shares less lies on another pipe (a ridge
+  // fit reaching a neighbour): the image confirming both says nothing against either.
+  const auto rivals = [&](const PipeEstimate& a, const PipeEstimate& b) {
+    return pick_distance_mm(lm, a.model_to_bin, b.model_to_bin, ambiguity_mm) > ambiguity_mm &&
+           shared_tube(lm, a.model_to_bin, b.model_to_bin) >= kRivalMinSharedTube;
+  };
   // Refines a hypothesis on observed points (the region's; a twin's, those the best explains),
   // has the image judge it, and keeps the best two that are more than ambiguity_pose_mm apart.
   const auto judge = [&](const Pose& start, float ridge_cost_mm, const Eigen::Vector3f* points,
@@ -414,12 +421,13 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
     e.candidate = in.index;
     const float q = hypothesis_quality(e.check);
     if (!have_best || q > hypothesis_quality(best.check)) {
-      if (have_best && pick_distance_mm(lm, best.model_to_bin, e.model_to_bin, ambiguity_mm) > ambiguity_mm)
+      if (have_best && rivals(best, e))
         second = best, have_second = true;
+      else if (have_second && !rivals(second, e))
+        have_second = false;  // a rival of a best on another pipe
       best = e, have_best = true;
-    } else if (!have_second || q > hypothesis_quality(second.check)) {
-      if (pick_distance_mm(lm, best.model_to_bin, e.model_to_bin, ambiguity_mm) > ambiguity_mm)
-        second = e, have_second = true;
+    } else if ((!have_second || q > hypothesis_quality(second.check)) && rivals(e, best)) {
+      second = e, have_second = true;
     }
   };
   int tried = 0;

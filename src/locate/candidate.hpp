@@ -35,6 +35,10 @@ inline int min_ridge_points(const LocateConfig& cfg, float extent_l_mm) {
 // Ranks verified hypotheses: a pixel the sensor saw through counts twice against the agreement,
 // since a model lying over empty space is wrong however much else it covers.
 constexpr float kFreeSpaceWeight = 2.0f;
+// A hypothesis is a rival of the best (another reading of the same pipe) only where at least this
+// share of its centreline lies within D/2 of the best's: readings of one pipe share 0.56-1.0 of it
+// on the zoo, hypotheses on a neighbouring pipe none.
+constexpr float kRivalMinSharedTube = 0.25f;
 // An ambiguous estimate keeps half its score: it ranks below a sure one of about the same cover.
 constexpr float kAmbiguousScoreFactor = 0.5f;
 // A rival is told apart where at least kMinTellingPx pixels speak for the best and at most

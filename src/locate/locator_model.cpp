@@ -240,6 +240,27 @@ float pose_distance_mm(const LocatorModel& lm, const Pose& a, const Pose& b, flo
   return points_distance_mm(lm, lm.check_points, a, b, bound_mm);
 }
 
+float shared_tube(const LocatorModel& lm, const Pose& a, const Pose& b) {
+  const std::vector<Eigen::Vector3f>& c = lm.centreline_points;
+  if (c.size() < 2) return 1;
+  // a's points in b's model frame, against b's centreline as a polyline.
+  const Eigen::Matrix4f b_from_a = (b.inverse() * a).matrix().cast<float>();
+  const float near_sq = 0.25f * lm.tube_d_mm * lm.tube_d_mm;
+  int shared = 0;
+  for (const Eigen::Vector3f& p : c) {
+    const Eigen::Vector3f q = b_from_a.topLeftCorner<3, 3>() * p + b_from_a.topRightCorner<3, 1>();
+    for (std::size_t k = 0; k + 1 < c.size(); ++k) {
+      const Eigen::Vector3f s = c[k + 1] - c[k];
+      const float along = std::clamp((q - c[k]).dot(s) / std::max(s.squaredNorm(), 1e-12f), 0.0f, 1.0f);
+      if ((q - c[k] - along * s).squaredNorm() <= near_sq) {
+        ++shared;
+        break;
+      }
+    }
+  }
+  return float(shared) / float(c.size());
+}
+
 float pick_distance_mm(const LocatorModel& lm, const Pose& a, const Pose& b, float bound_mm) {
   return points_distance_mm(lm, lm.centreline_points.empty() ? lm.check_points : lm.centreline_points, a, b,
                             bound_mm);

@@ -90,13 +90,16 @@ int ridge_sample_stride(float cell_mm, const LocateConfig& cfg);
 // III applied to the model's ideal top view at model_to_bin (the whole silhouette, no noise).
 AxisEstimate top_view_axis(const PipeModel& model, const Pose& model_to_bin, const LocateConfig& cfg);
 
-// Largest distance of the check points between two poses, minimised over the model's symmetries.
-// Exact up to `bound_mm`; a distance beyond it may be cut short, returning some value beyond it
-// (a caller comparing with bound_mm gets the same answer, sooner).
 // How far apart two poses put the tube's centreline (the pick), the model's symmetries taken into
 // account; pose_distance_mm where no centreline was found. Beyond bound_mm, some value beyond it.
 float pick_distance_mm(const LocatorModel& lm, const Pose& a, const Pose& b, float bound_mm);
+// Largest distance of the check points between two poses, minimised over the model's symmetries.
+// Exact up to `bound_mm`; a distance beyond it may be cut short, returning some value beyond it
+// (a caller comparing with bound_mm gets the same answer, sooner).
 float pose_distance_mm(const LocatorModel& lm, const Pose& a, const Pose& b,
                        float bound_mm = std::numeric_limits<float>::infinity());
+// The share of a's centreline within D/2 of b's (both poses in one frame): how much of one tube
+// the two poses put in the same place. 1 where no centreline was found.
+float shared_tube(const LocatorModel& lm, const Pose& a, const Pose& b);
 
 }  // namespace pipeloc
