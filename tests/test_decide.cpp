@@ -54,6 +54,13 @@ Evidence ends_read(Evidence e, int best_pinned, int best_continued, int second_p
   return e;
 }
 
+// Another turn of the pipe about its own length confirmed as well, further than the pick's
+// tolerance from the best (judge_rolls).
+Evidence turn_unsure(Evidence e) {
+  e.roll_unsure = true;
+  return e;
+}
+
 // Found from a region shorter than a * L (tried after the long ones).
 Evidence from_short_region(Evidence e) {
   e.short_region = true;
@@ -235,6 +242,9 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
        CandidateOutcome::not_confirmed, false, false, 0, true},
       {"rival clearly worse", judged_with_rival(seen(900, 0, 0), seen(840, 0, 0)), true,
        CandidateOutcome::accepted, false, true, 0.9f},
+      // A turn about its own length the image does not tell apart: not known to the pick's tolerance.
+      {"its turn about its length not told", turn_unsure(judged(seen(900, 0, 0))), true,
+       CandidateOutcome::accepted, true, false, 0.45f},
       // A pipe that slides along itself (an arc, a coil, a straight run) is placed by its ends.
       {"sliding, an end pinned", sliding(judged(seen(900, 0, 0)), 1, 0), true, CandidateOutcome::accepted,
        false, true, 0.9f},

@@ -140,6 +140,27 @@ TEST(PoseDistance, SharedTubeIsTheShareOfTheCentrelineWhereTheOtherPoseHasIt) {
   EXPECT_LT(shared_tube(lm, beside, a), kRivalMinSharedTube);
 }
 
+// Beyond the paper: the turns judged about a pipe's own length. An elbow has three quarter turns
+// about the principal axis of its centreline, which each keep the centreline's centroid and axis
+// in place and four of which are no turn; a straight tube (the same pick turned) and an arc (placed
+// by its ends along itself) have none.
+TEST(LocatorModel, QuarterTurnsAboutThePipesLengthForPipesThatDoNotSlide) {
+  LocateConfig cfg;
+  const LocatorModel elbow = prepare_locator_model(pipe_of("S40,B45r20,S30", 10), 8, cfg);
+  ASSERT_EQ(elbow.rolls.size(), 3u);
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  for (const auto& p : elbow.centreline_points) centroid += p.cast<double>();
+  centroid /= double(elbow.centreline_points.size());
+  const double turn[] = {M_PI / 2, M_PI, M_PI / 2};  // a quarter, a half, three quarters (= -1/4)
+  for (std::size_t k = 0; k < 3; ++k) {
+    EXPECT_LT((elbow.rolls[k] * centroid - centroid).norm(), 1e-6);
+    EXPECT_NEAR(Eigen::AngleAxisd(elbow.rolls[k].linear()).angle(), turn[k], 1e-6);
+  }
+  EXPECT_TRUE((elbow.rolls[0] * elbow.rolls[2]).matrix().isApprox(Eigen::Matrix4d::Identity(), 1e-9));
+  EXPECT_TRUE(prepare_locator_model(pipe_of("S150", 20, "straight"), 8, cfg).rolls.empty());
+  EXPECT_TRUE(prepare_locator_model(pipe_of("B180r100", 12), 8, cfg).rolls.empty());
+}
+
 // IV-B: from the paper's ranges (about the axis up to +-70 degrees, 3 cm along it) the ridge
 // ICP with refinement converges on the pipe.
 TEST(RidgeIcp, ConvergesFromThePapersRanges) {

@@ -242,6 +242,8 @@ void read_locate(Section& s, LocateConfig* c) {
   s.real("ambiguity_quality_margin", &c->ambiguity_quality_margin, 0, 1, "share");
   s.boolean("tell_rivals_apart", &c->tell_rivals_apart);
   s.integer("verify_hypotheses", &c->verify_hypotheses, 1, 24, "fits per region");
+  s.boolean("judge_rolls", &c->judge_rolls);
+  s.real("roll_ambiguity_mm", &c->roll_ambiguity_mm, 0, 1000, "mm");
   s.boolean("judge_slides", &c->judge_slides);
   s.boolean("pin_slides_by_ends", &c->pin_slides_by_ends);
   s.integer("max_candidates", &c->max_candidates, 1, 256, "regions");

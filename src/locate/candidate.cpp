@@ -173,6 +173,8 @@ Decision decide(const Evidence& given, const LocateConfig& cfg) {
   // Beyond the paper: a pipe that slides along itself is placed along its length only by an end
   // the image shows; where none is seen, or the tube goes on beyond one, the pose may be slid.
   if (e.ends_must_pin && (e.best.ends_pinned == 0 || e.best.ends_continued > 0)) out.ambiguous = true;
+  // ... and one whose turn about its own length the image does not tell (judge_rolls).
+  if (e.roll_unsure) out.ambiguous = true;
   // The score is the share of the whole pipe the image confirms: what lies under others or out of
   // the view is not confirmed. A pose checked on all of the pipe goes before one reaching out of
   // the view that agrees as well where it is seen (its part out of view may lie elsewhere).
@@ -369,6 +371,7 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
   };
   // Refines a hypothesis on observed points (the region's; a twin's, those the best explains),
   // has the image judge it, and keeps the best two that are more than ambiguity_pose_mm apart.
+  // Returns the hypothesis as judged.
   const auto judge = [&](const Pose& start, float ridge_cost_mm, const Eigen::Vector3f* points,
                          int n_points) {
     auto t0 = Clock::now();
@@ -429,6 +432,7 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
     } else if ((!have_second || q > hypothesis_quality(second.check)) && rivals(e, best)) {
       second = e, have_second = true;
     }
+    return e;
   };
   int tried = 0;
   for (std::size_t i = 0; i < fits.size() && tried < cfg.verify_hypotheses; ++i) {
@@ -474,6 +478,25 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
             found_count > 0 ? found_count : refine_count);
     }
     if (pick_distance_mm(lm, found, best.model_to_bin, ambiguity_mm) <= ambiguity_mm) break;  // it held
+  }
+  // Beyond the paper: the best turned about the pipe's own length by quarter turns, each refined:
+  // where the image confirms another turn about as well and it moves the pick beyond
+  // roll_ambiguity_mm, the pipe's turn is not known to the pick's tolerance.
+  if (cfg.judge_rolls && have_best && !lm.rolls.empty()) {
+    constexpr std::size_t kTurns = 4;
+    PipeEstimate turned[kTurns];
+    std::size_t n_turned = 0;
+    turned[n_turned++] = best;
+    const Pose found = best.model_to_bin;
+    const float found_cost_mm = best.ridge_cost_mm;
+    for (std::size_t k = 0; k < lm.rolls.size() && n_turned < kTurns; ++k) {
+      if (deadline.passed()) return out;
+      turned[n_turned++] = judge(found * lm.rolls[k], found_cost_mm, buf->region_pts.data(), refine_count);
+    }
+    const float roll_mm = float(cfg.roll_ambiguity_mm);
+    for (std::size_t k = 0; k < n_turned && !out.roll_unsure; ++k)
+      out.roll_unsure = as_good(turned[k].check, best.check, cfg) &&
+                        pick_distance_mm(lm, best.model_to_bin, turned[k].model_to_bin, roll_mm) > roll_mm;
   }
   if (have_best) {
     const Pose found = best.model_to_bin;  // the best after its twins: slid poses of this one
@@ -543,6 +566,7 @@ bool work_candidate(const CandidateContext& ctx, const CandidateInput& in, const
   evidence.have_best = judged.have_best, evidence.have_second = judged.have_second;
   evidence.best = judged.best.check, evidence.second = judged.second.check;
   evidence.told = judged.told;
+  evidence.roll_unsure = judged.roll_unsure;
   const Decision decision = decide(evidence, ctx.cfg);
   const PipeEstimate& taken = decision.rival_taken ? judged.second : judged.best;
   trace->check = taken.check;

@@ -96,6 +96,7 @@ struct Evidence {
   bool have_best = false, have_second = false;    // hypotheses: the best judged, and a rival
   Verification best, second;                      // ... more than ambiguity_pose_mm from it
   TellingPixels told;                             // ... the pixels where the image tells them apart
+  bool roll_unsure = false;                       // ... the turn about its length not told (judge_rolls)
 };
 
 struct Decision {
@@ -232,6 +233,9 @@ struct Hypotheses {
   PipeEstimate best, second;
   bool have_best = false, have_second = false;
   TellingPixels told;  // for_a: pixels for the best, for_b: for the second
+  // A hypothesis turned from another about the pipe's length (judge_rolls) is confirmed about as
+  // well as the best and lies more than roll_ambiguity_mm from it.
+  bool roll_unsure = false;
 };
 Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& in,
                             const ObservedRidge& observed, const RidgeFits& fitted, const Deadline& deadline,

@@ -112,6 +112,9 @@ struct LocateConfig {
   bool tell_rivals_apart = true;  // ... unless, where the two differ, the image speaks for the best
                                   // (at least 20 pixels) and at most a quarter as much for the rival
                                   // (not for a pipe that slides along itself: its ends place it)
+  bool judge_rolls = true;        // the found pose turned about the pipe's own length by quarter turns
+  double roll_ambiguity_mm = 5;   // ... a turn the image confirms as well that moves the pick further
+                                  // than this (the pick-correct tolerance): ambiguous
   bool judge_slides = true;  // the found pose slid along the pipe itself (an arc about its centre,
                              // a coil along its helix, a straight run along its axis) is a rival too
   bool pin_slides_by_ends = true;  // a pipe that slides along itself is pickable only where the
@@ -142,6 +145,7 @@ inline void use_paper_search(LocateConfig* c) {
   c->icp_probed_states = 2 * c->initial_rotations;
   c->icp_continued_states = 2 * c->initial_rotations;
   c->judge_slides = false;
+  c->judge_rolls = false;
   c->residual_rescue_of_rth = 1;
   c->short_region_min_extent_of_l = c->region_min_extent_of_l;
 }

@@ -50,6 +50,12 @@ struct LocatorModel {
   // Beyond the paper: the model's slides along itself (model/slides.hpp) by more than the
   // ambiguity distance; the pose found, slid, is judged as a rival (off: judge_slides = false).
   std::vector<Pose> slides;
+  // Beyond the paper: quarter turns about the centreline's principal axis through its centroid
+  // (none for a straight tube, whose turn about its axis is the same pick). A short or nearly
+  // straight pipe's top strip tells its turn about its own length least: the refinement keeps the
+  // turn it started from (the 8.4 mm elbow's and the 16.7 mm S's poses 5-12 mm off are turned
+  // 20-140 degrees about it).
+  std::vector<Pose> rolls;
   // Beyond the paper: the principal direction of a partly hidden curved pipe can be far from that
   // of the whole model, so each start is also turned about the vertical, in steps covering half a
   // turn (the reversed direction covers the other half).
