@@ -51,7 +51,8 @@ struct LocatorModel {
   // ambiguity distance; the pose found, slid, is judged as a rival (off: judge_slides = false).
   std::vector<Pose> slides;
   // Beyond the paper: quarter turns about the centreline's principal axis through its centroid
-  // (none for a straight tube, whose turn about its axis is the same pick). A short or nearly
+  // (none for a straight tube, whose turn about its axis is the same pick, nor for a pipe that
+  // slides along itself: turned, it slides onto a pose as good, and its ends place it). A short or nearly
   // straight pipe's top strip tells its turn about its own length least: the refinement keeps the
   // turn it started from (the 8.4 mm elbow's and the 16.7 mm S's poses 5-12 mm off are turned
   // 20-140 degrees about it).
