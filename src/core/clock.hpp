@@ -21,13 +21,13 @@ inline double unix_ms_now() {
   return std::chrono::duration<double, std::milli>(std::chrono::system_clock::now().time_since_epoch())
       .count();
 }
-// "2026-11-23 18:45:44" (UTC) from Unix milliseconds.
-inline std::string utc_text(double unix_ms) {
+// "2026-11-23 18:45:44" (UTC) from Unix milliseconds; another strftime format on request.
+inline std::string utc_text(double unix_ms, const char* format = "%Y-%m-%d %H:%M:%S") {
   const std::time_t t = std::time_t(unix_ms / 1000);
   std::tm tm{};
   gmtime_r(&t, &tm);
-  char s[32];
-  std::strftime(s, sizeof s, "%Y-%m-%d %H:%M:%S", &tm);
+  char s[64];
+  std::strftime(s, sizeof s, format, &tm);
   return s;
 }
 

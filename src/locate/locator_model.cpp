@@ -202,19 +202,12 @@ LocatorModel prepare_locator_model(const PipeModel& model, float margin_mm, cons
       lm.slides.push_back(s.motion);
   }
   if (lm.centreline_points.size() >= 3 && !lm.straight && lm.slides.empty()) {
-    Eigen::Vector3d c = Eigen::Vector3d::Zero();
-    for (const auto& p : lm.centreline_points) c += p.cast<double>();
-    c /= double(lm.centreline_points.size());
-    Eigen::Matrix3d spread = Eigen::Matrix3d::Zero();
-    for (const auto& p : lm.centreline_points)
-      spread += (p.cast<double>() - c) * (p.cast<double>() - c).transpose();
-    const Eigen::Vector3d axis = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(spread).eigenvectors().col(2);
-    for (int quarter = 1; quarter < 4; ++quarter) {
-      Pose roll = Pose::Identity();
-      roll.linear() = Eigen::AngleAxisd(0.5 * M_PI * quarter, axis).toRotationMatrix();
-      roll.translation() = c - roll.linear() * c;
-      lm.rolls.push_back(roll);
-    }
+    Eigen::Vector3f c = Eigen::Vector3f::Zero();
+    for (const auto& p : lm.centreline_points) c += p;
+    c /= float(lm.centreline_points.size());
+    const Eigen::Vector3d axis = principal_axes(lm.centreline_points, c).col(2);
+    for (int quarter = 1; quarter < 4; ++quarter)
+      lm.rolls.push_back(turn_about(axis, c, 0.5 * M_PI * quarter));
   }
   return lm;
 }

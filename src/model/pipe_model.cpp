@@ -193,14 +193,18 @@ Eigen::Matrix3d principal_axes(const std::vector<Eigen::Vector3f>& points, const
   return eig.eigenvectors();
 }
 
+Pose turn_about(const Eigen::Vector3d& axis, const Eigen::Vector3f& centre, double angle) {
+  Pose m = Pose::Identity();
+  m.linear() = Eigen::AngleAxisd(angle, axis).toRotationMatrix();
+  m.translation() = centre.cast<double>() - m.linear() * centre.cast<double>();
+  return m;
+}
+
 namespace {
 
 // The half-turn about the line through `centre` along `axis`.
 Pose half_turn(const Eigen::Vector3d& axis, const Eigen::Vector3f& centre) {
-  Pose m = Pose::Identity();
-  m.linear() = Eigen::AngleAxisd(M_PI, axis).toRotationMatrix();
-  m.translation() = centre.cast<double>() - m.linear() * centre.cast<double>();
-  return m;
+  return turn_about(axis, centre, M_PI);
 }
 
 // An exact symmetry lands this share of the samples on the surface (the rest: sharp edges).

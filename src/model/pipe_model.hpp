@@ -62,6 +62,8 @@ float measure_tube_diameter(const Mesh& mesh, const std::vector<Eigen::Vector3f>
 // leaves the mesh. A solid pipe comes back unchanged. removed_faces: how many were taken out.
 Mesh without_bore(const Mesh& mesh, int* removed_faces);
 float longest_extent(const std::vector<Eigen::Vector3f>& vertices);
+// The turn by `angle` (rad) about the line through `centre` along `axis`.
+Pose turn_about(const Eigen::Vector3d& axis, const Eigen::Vector3f& centre, double angle);
 // Principal axes of a point set about `centroid`: the columns, by increasing spread.
 Eigen::Matrix3d principal_axes(const std::vector<Eigen::Vector3f>& points, const Eigen::Vector3f& centroid);
 // The half-turns about the principal axes that land (all but a sharp edge's share of) the samples

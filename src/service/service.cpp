@@ -5,11 +5,11 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <ctime>
 #include <filesystem>
 #include <string>
 #include <vector>
 
+#include "core/clock.hpp"
 #include "io/bop.hpp"
 #include "io/json_file.hpp"
 #include "io/png.hpp"
@@ -230,13 +230,9 @@ void Service::keep_no_pick_frame(const Image<Rgb>& overlay) {
   try {
     const fs::path dir = fs::path(cfg_.log.dir) / "no-pick";
     fs::create_directories(dir);
-    const std::time_t now = std::time(nullptr);
-    std::tm utc{};
-    gmtime_r(&now, &utc);
-    char stem[64];
-    const std::size_t n = std::strftime(stem, sizeof stem, "%Y%m%d-%H%M%S", &utc);
-    std::snprintf(stem + n, sizeof stem - n, "-cycle%08u", cycles_);
-    const std::string base = (dir / stem).string();
+    char cycle[24];
+    std::snprintf(cycle, sizeof cycle, "-cycle%08u", cycles_);
+    const std::string base = (dir / (utc_text(unix_ms_now(), "%Y%m%d-%H%M%S") + cycle)).string();
     write_depth_png(base + "-depth.png", to_raw_depth(frame_.depth_mm, frame_.camera.depth_scale));
     write_json(base + "-camera.json", Json{{"0", camera_to_json(frame_.camera)}});
     write_rgb_png(base + "-overlay.png", overlay);
