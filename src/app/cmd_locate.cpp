@@ -12,6 +12,7 @@
 #include "io/bop.hpp"
 #include "io/results_csv.hpp"
 #include "locate/locator.hpp"
+#include "locate/speckles.hpp"
 #include "model/pipe_model.hpp"
 #include "report/locate_overlay.hpp"
 #include "service/frame_source.hpp"
@@ -136,6 +137,9 @@ void add_locate(CLI::App& app) {
     if (out.noise.samples > 0)
       spdlog::info("depth noise {:.2f} mm (1 sigma, measured) at a median depth of {:.0f} mm",
                    out.noise.sigma_mm, out.noise.depth_mm);
+    if (locator.config().remove_speckles)
+      spdlog::info("speckles left out: {} readings beyond every reading within {} px by more than {:.1f} mm",
+                   out.speckles, kSpeckleReachPx, locator.config().continuity_step_max_mm);
     spdlog::info(
         "thresholds in effect: continuity step {:.1f} mm, verify tolerance {:.1f} mm, refine inliers "
         "{:.1f} mm, normal window {:.1f} mm, hole fill {:.1f} mm",

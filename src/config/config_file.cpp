@@ -186,6 +186,7 @@ void read_roi(Section& s, RegionOfInterest* roi) {
 
 void read_locate(Section& s, LocateConfig* c) {
   s.boolean("raise_to_noise", &c->raise_to_noise);
+  s.boolean("remove_speckles", &c->remove_speckles);
   s.real("zbuffer_pixel_mm", &c->zbuffer_pixel_mm, 0.25, 10, "mm");
   s.real("zbuffer_max_side_mm", &c->zbuffer_max_side_mm, 100, 5000, "mm");
   s.real("hole_fill_mm", &c->hole_fill_mm, 0, 50, "mm (0: derived)");

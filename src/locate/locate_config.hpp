@@ -15,6 +15,10 @@ struct RegionOfInterest {
 struct LocateConfig {
   RegionOfInterest roi;  // [locate] roi_min_mm / roi_max_mm
 
+  // Beyond the paper: a reading nearer or farther than every reading within 2 pixels by more than
+  // continuity_step_max_mm is a speckle (a sensor's stray reading), left out (locate/speckles.hpp).
+  bool remove_speckles = true;
+
   // II-A: Z-buffer and normals.
   double zbuffer_pixel_mm = 1.0;        // the paper's 1 mm cells
   double zbuffer_max_side_mm = 1600;    // the Z-buffer covers at most this square of the bin

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "locate/speckles.hpp"
+
 namespace pipeloc {
 Locator::Locator(const PipeModel& model, const LocateConfig& cfg, const Intrinsics& camera)
     : model_(model),
@@ -15,6 +17,7 @@ Locator::Locator(const PipeModel& model, const LocateConfig& cfg, const Intrinsi
   reserve_zbuffer(&zb_, cfg.zbuffer_max_side_mm, cfg.zbuffer_pixel_mm);
   camera_width_ = camera.width, camera_height_ = camera.height;
   reserve_zbuffer_points(&zb_points_, camera.width, camera.height, pool_.size());
+  if (cfg.remove_speckles) depth_kept_.resize(camera.width, camera.height, 0.0f);
   reserve_normals(&nm_, zb_, pool_.size());
   holes_.reserve(zb_);
   constexpr int kHeightBinsMm = 8192;  // heights over 8 m in one frame are not a bin
@@ -40,7 +43,7 @@ Locator::Locator(const PipeModel& model, const LocateConfig& cfg, const Intrinsi
   out_.traces.reserve(std::size_t(cfg.max_candidates));
 }
 
-const LocateOutput& Locator::locate(const Image<float>& depth, const CameraInfo& camera,
+const LocateOutput& Locator::locate(const Image<float>& frame_depth, const CameraInfo& camera,
                                     Clock::time_point deadline) {
   const auto t_start = Clock::now();
   out_.estimates.clear();
@@ -52,9 +55,10 @@ const LocateOutput& Locator::locate(const Image<float>& depth, const CameraInfo&
   // The thresholds that follow the sensor: its noise and pixel footprint, measured in this frame
   // (only when a key is left to be derived from it).
   if (derives_from_frame(user_cfg_)) {
-    out_.noise = measure_depth_noise(depth, &noise_histograms_);
+    out_.noise = measure_depth_noise(frame_depth, &noise_histograms_);
     set_frame_thresholds(user_cfg_, model_.tube_diameter_mm, out_.noise, camera.intrinsics, &cfg_);
   }
+
   // Anytime: what is not expected to finish before the deadline is not started. The expected
   // durations are running averages of earlier cycles (none yet: everything is tried).
   if (deadline != Clock::time_point::max() && t_start + ms_duration(serial_ms_avg_) > deadline) {
@@ -64,6 +68,10 @@ const LocateOutput& Locator::locate(const Image<float>& depth, const CameraInfo&
   }
 
   auto t = Clock::now();
+  out_.speckles = cfg_.remove_speckles
+                      ? remove_speckles(frame_depth, float(cfg_.continuity_step_max_mm), &depth_kept_)
+                      : 0;
+  const Image<float>& depth = cfg_.remove_speckles ? depth_kept_ : frame_depth;
   build_zbuffer_banded(depth, camera, bin_to_cam);
   // The floor: the height only 2 % of the visible surface lies under (noise takes the lowest cells
   // of a seen floor a little deeper, which errs on the side of keeping a pose).

@@ -26,6 +26,7 @@ struct LocateOutput {
   RegionStats regions;
   StageTimes times;
   int valid_pixels = 0;
+  int speckles = 0;  // readings left out as speckles (remove_speckles)
   DepthNoise noise;  // measured in the frame when a threshold derives from it (else samples = 0)
   float lowest_surface_z_mm = 0;  // bin frame: the floor where it is seen (no pose lies below it)
   bool budget_exhausted = false;
@@ -95,6 +96,7 @@ class Locator {
   LocateConfig user_cfg_;  // as configured: keys at 0 are derived (thresholds.hpp)
   LocateConfig cfg_;       // in effect this frame
   NoiseHistograms noise_histograms_;
+  Image<float> depth_kept_;            // the frame less its speckles (remove_speckles)
   std::vector<int> height_histogram_;  // 1 mm bins, for the lowest surface
   LocatorModel lm_;
   StartSet starts_;
