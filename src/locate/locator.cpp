@@ -58,7 +58,6 @@ const LocateOutput& Locator::locate(const Image<float>& frame_depth, const Camer
     out_.noise = measure_depth_noise(frame_depth, &noise_histograms_);
     set_frame_thresholds(user_cfg_, model_.tube_diameter_mm, out_.noise, camera.intrinsics, &cfg_);
   }
-
   // Anytime: what is not expected to finish before the deadline is not started. The expected
   // durations are running averages of earlier cycles (none yet: everything is tried).
   if (deadline != Clock::time_point::max() && t_start + ms_duration(serial_ms_avg_) > deadline) {
