@@ -202,9 +202,7 @@ LocatorModel prepare_locator_model(const PipeModel& model, float margin_mm, cons
       lm.slides.push_back(s.motion);
   }
   if (lm.centreline_points.size() >= 3 && !lm.straight && lm.slides.empty()) {
-    Eigen::Vector3f c = Eigen::Vector3f::Zero();
-    for (const auto& p : lm.centreline_points) c += p;
-    c /= float(lm.centreline_points.size());
+    const Eigen::Vector3f c = centroid_of(lm.centreline_points);
     const Eigen::Vector3d axis = principal_axes(lm.centreline_points, c).col(2);
     for (int quarter = 1; quarter < 4; ++quarter)
       lm.rolls.push_back(turn_about(axis, c, 0.5 * M_PI * quarter));

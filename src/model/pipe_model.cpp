@@ -193,6 +193,12 @@ Eigen::Matrix3d principal_axes(const std::vector<Eigen::Vector3f>& points, const
   return eig.eigenvectors();
 }
 
+Eigen::Vector3f centroid_of(const std::vector<Eigen::Vector3f>& points) {
+  Eigen::Vector3f c = Eigen::Vector3f::Zero();
+  for (const auto& p : points) c += p;
+  return points.empty() ? c : Eigen::Vector3f(c / float(points.size()));
+}
+
 Pose turn_about(const Eigen::Vector3d& axis, const Eigen::Vector3f& centre, double angle) {
   Pose m = Pose::Identity();
   m.linear() = Eigen::AngleAxisd(angle, axis).toRotationMatrix();
@@ -427,8 +433,7 @@ PipeModel derive_pipe_model(Mesh mesh, const std::string& source, const ModelDer
   // Clamped before the conversion: an area of 1e12 mm^2 times the density is beyond int (fuzz).
   const int count = int(std::clamp(double(area) * params.samples_per_mm2, 100.0, double(params.max_samples)));
   model.surface = sample_surface(model.mesh, model.vertex_normals, count, params.seed);
-  for (const auto& p : model.surface.points) model.centroid += p;
-  model.centroid /= float(model.surface.points.size());
+  model.centroid = centroid_of(model.surface.points);
   model.tube_diameter_mm = measure_tube_diameter(model.mesh, model.vertex_normals);
   model.extent_mm = longest_extent(model.mesh.vertices);
   if (!(model.tube_diameter_mm > 0) || model.tube_diameter_mm >= model.extent_mm)

@@ -64,6 +64,8 @@ Mesh without_bore(const Mesh& mesh, int* removed_faces);
 float longest_extent(const std::vector<Eigen::Vector3f>& vertices);
 // The turn by `angle` (rad) about the line through `centre` along `axis`.
 Pose turn_about(const Eigen::Vector3d& axis, const Eigen::Vector3f& centre, double angle);
+// The mean of a point set (zero for none).
+Eigen::Vector3f centroid_of(const std::vector<Eigen::Vector3f>& points);
 // Principal axes of a point set about `centroid`: the columns, by increasing spread.
 Eigen::Matrix3d principal_axes(const std::vector<Eigen::Vector3f>& points, const Eigen::Vector3f& centroid);
 // The half-turns about the principal axes that land (all but a sharp edge's share of) the samples
