@@ -41,7 +41,7 @@ Verification seen_through_patch(Verification v) {
 
 // A pipe that slides along itself, its ends judged: `pinned` shown ending, `continued` going on.
 Evidence sliding(Evidence e, int pinned, int continued) {
-  e.ends_must_pin = true;
+  e.model_slides = e.ends_must_pin = true;
   e.best.ends_pinned = pinned, e.best.ends_continued = continued;
   return e;
 }
@@ -183,11 +183,17 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
       {"a third out of the view, ends read, one pinned",
        ends_read(judged(outside_view(seen(950, 0, 0), 0.35f)), 1, 0, 0, 0), true, CandidateOutcome::accepted,
        false, true, 0.6175f},
-      // Not for a pose found from a region shorter than a * L: where it lies along what is out of
-      // the view, a short piece of its top does not say.
-      {"a third out of the view, well seen, from a short region",
-       from_short_region(judged(outside_view(seen(950, 0, 0), 0.35f))), true, CandidateOutcome::accepted,
-       false, false, 0.6175f},
+      // From a region shorter than a * L only for a pipe that does not slide along itself, its
+      // ends read and one pinned: where a sliding pipe lies along what is out of the view, a short
+      // piece of its top does not say.
+      {"a third out of the view, well seen, from a short region, one end pinned",
+       from_short_region(ends_read(judged(outside_view(seen(950, 0, 0), 0.35f)), 1, 0, 0, 0)), true,
+       CandidateOutcome::accepted, false, true, 0.6175f},
+      {"the same, its ends not read", from_short_region(judged(outside_view(seen(950, 0, 0), 0.35f))), true,
+       CandidateOutcome::accepted, false, false, 0.6175f},
+      {"the same, a pipe sliding along itself",
+       from_short_region(sliding(ends_read(judged(outside_view(seen(950, 0, 0), 0.35f)), 1, 0, 0, 0), 1, 0)),
+       true, CandidateOutcome::accepted, false, false, 0.6175f},
       {"a fifth out of the view, the rest confirmed, from a short region",
        from_short_region(judged(outside_view(seen(900, 0, 0), 0.2f))), true, CandidateOutcome::accepted,
        false, true, 0.72f},

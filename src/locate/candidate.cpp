@@ -187,11 +187,14 @@ Decision decide(const Evidence& given, const LocateConfig& cfg) {
   const float confirmed_of_whole = e.best.agreement() * (1.0f - e.best.outside_view);
   // ... or, up to verify_max_outside_view_well_seen of it out of the view, the image confirms
   // verify_well_seen_agreement of what is in view, and, where the ends are read, shows one of
-  // them. Not for a pose found from a short region: a pipe whose top is seen over a short length
-  // may lie anywhere along it out of the view.
+  // them. From a short region only for a pipe that does not slide along itself, its ends read and
+  // one shown: a pipe that does, its top seen over a short length, may lie anywhere along it out
+  // of the view; one that does not is placed by the bends in view and the end shown (23-planar
+  // of the zoo: 3 more pipes taken in 3 bins).
+  const bool short_but_placed = e.ends_judged && e.best.ends_pinned > 0 && !e.model_slides;
   const bool checked_in_view = (e.best.outside_view <= float(cfg.verify_max_outside_view) &&
                                 confirmed_of_whole >= float(cfg.verify_min_agreement)) ||
-                               (!e.short_region &&
+                               ((!e.short_region || short_but_placed) &&
                                 e.best.outside_view <= float(cfg.verify_max_outside_view_well_seen) &&
                                 e.best.agreement() >= float(cfg.verify_well_seen_agreement) &&
                                 (!e.ends_judged || e.best.ends_pinned > 0));
@@ -532,7 +535,8 @@ bool work_candidate(const CandidateContext& ctx, const CandidateInput& in, const
   Evidence evidence;
   evidence.tube_d_mm = ctx.lm.tube_d_mm;
   evidence.extent_l_mm = ctx.lm.extent_l_mm;
-  evidence.ends_must_pin = ctx.cfg.pin_slides_by_ends && !ctx.lm.slides.empty();
+  evidence.model_slides = !ctx.lm.slides.empty();
+  evidence.ends_must_pin = ctx.cfg.pin_slides_by_ends && evidence.model_slides;
   evidence.short_region = in.region->short_region;
   evidence.ends_judged = ctx.cfg.pin_slides_by_ends;
   // Between two stages: decided by the evidence so far, or out of time. A candidate cut short

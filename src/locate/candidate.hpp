@@ -88,7 +88,8 @@ struct Evidence {
   CandidateStage reached = CandidateStage::axis;  // the last stage done
   float tube_d_mm = 0;                            // D of the model
   float extent_l_mm = 0;                          // L of the model
-  bool ends_must_pin = false;                     // the model slides along itself: its ends place it
+  bool model_slides = false;                      // the model slides along itself (LocatorModel::slides)
+  bool ends_must_pin = false;                     // ... and its ends place it (pin_slides_by_ends)
   bool ends_judged = false;                       // the poses' ends were read (pin_slides_by_ends)
   bool short_region = false;                      // the region was shorter than a * L
   int ridge_points = 0;                           // observed_ridge: observed Z-ridge points
