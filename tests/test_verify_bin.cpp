@@ -294,6 +294,52 @@ TEST(BinAwareVerification, ANearTwinIsToldApartByThePixelsWhereTheyDiffer) {
   EXPECT_EQ(hidden.for_a + hidden.for_b, 0);
 }
 
+// The same bend alone on a floor, a pipe lying across one of its ends 20 mm above the tube. The
+// floor beyond that end reads as the image showing the pipe end there, unless the end must show
+// its tip (a near twin overshooting the pipe's end under such a pipe was taken for the pipe).
+TEST(BinAwareVerification, AnEndHiddenUnderAPipeAcrossIsNotShownEnding) {
+  const LocateConfig cfg;
+  const PipeModel model = pipe_of("S85,B-134r188,S104", 23.3, "bend");
+  const LocatorModel lm = prepare_locator_model(model, 8, cfg);
+  ASSERT_TRUE(lm.slides.empty());
+  const float d = model.tube_diameter_mm, tol = float(cfg.verify_tolerance_mm);
+  Intrinsics k;
+  k.width = 640, k.height = 480, k.fx = k.fy = 570, k.cx = 320, k.cy = 240;
+  Pose pipe = Pose::Identity();
+  pipe.linear() = Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  pipe.translation() = Eigen::Vector3d(0, 0, 950);
+  ProjectedMesh projected;
+  projected.reserve(model.mesh);
+  Image<float> at_pipe(k.width, k.height, 0.0f);
+  const PixelBox box = render_depth_in_box(model.mesh, pipe, k, &at_pipe, &projected);
+  // The sensor: the floor 1 m away, the pipe, and within a diameter of one end (in the image) the
+  // pipe across.
+  const Eigen::Vector3d end = pipe * lm.centreline_points.back().cast<double>();
+  const Eigen::Vector2d end_px = k.project(end);
+  const double cover_px = d * k.fx / end.z();
+  const auto with_cover = [&](bool covered) {
+    Image<float> depth(k.width, k.height, 1000.0f);
+    for (int y = 0; y < k.height; ++y)
+      for (int x = 0; x < k.width; ++x) {
+        if (x >= box.x0 && x <= box.x1 && y >= box.y0 && y <= box.y1 && at_pipe.at(x, y) > 0)
+          depth.at(x, y) = at_pipe.at(x, y);
+        if (covered && (Eigen::Vector2d(x, y) - end_px).norm() < cover_px)
+          depth.at(x, y) = float(end.z() - d / 2 - 20);
+      }
+    return depth;
+  };
+  const auto pinned = [&](const Image<float>& depth, bool tip_must_show) {
+    Verification v;
+    judge_ends(lm.centreline_points, d, pipe, depth, k, tol, &v, tip_must_show);
+    return v.ends_pinned;
+  };
+  const Image<float> open = with_cover(false), covered = with_cover(true);
+  EXPECT_EQ(pinned(open, false), 2);
+  EXPECT_EQ(pinned(open, true), 2);      // both tips seen: both ends shown
+  EXPECT_EQ(pinned(covered, false), 2);  // the floor beyond the hidden end
+  EXPECT_EQ(pinned(covered, true), 1);
+}
+
 TEST(BinAwareVerification, NoPoseBelowTheFloor) {
   const PipeModel& model = preset_model("sbend");
   const SimulatedScene s = pile_of(model, 3, 4);

@@ -11,6 +11,8 @@ namespace {
 constexpr int kSideStepPx = 2;
 // Where beyond a tube's end the image is read (shares of D along the centreline's direction).
 constexpr float kEndProbesOfD[] = {0.75f, 1.25f};
+// ... and the tube's own surface at its tip and this far inside it (tip_must_show).
+constexpr float kTipProbesOfD[] = {0.0f, 0.5f};
 
 // The depth a render drew at (x, y): its image within the box it was drawn in; 0 elsewhere.
 float drawn_mm(const Image<float>& render, const PixelBox& box, int x, int y) {
@@ -103,7 +105,8 @@ Verification verify_pose(const Mesh& mesh, Winding winding, const Pose& model_to
 }
 
 void judge_ends(const std::vector<Eigen::Vector3f>& centreline, float d, const Pose& model_to_cam,
-                const Image<float>& depth, const Intrinsics& k, float tol, Verification* v) {
+                const Image<float>& depth, const Intrinsics& k, float tol, Verification* v,
+                bool tip_must_show) {
   v->ends_pinned = v->ends_continued = 0;
   const int n = int(centreline.size());
   if (n < 2) return;
@@ -118,23 +121,34 @@ void judge_ends(const std::vector<Eigen::Vector3f>& centreline, float d, const P
     Eigen::Vector3f out = r * (centreline[end] - centreline[in]);
     if (!(out.norm() > 0.25f * d)) continue;
     out.normalize();
-    int free = 0, going_on = 0, probes = 0;
-    for (const float beyond : kEndProbesOfD) {
-      // The continued tube's centre, and its surface facing the camera half a diameter nearer.
-      const Eigen::Vector3f centre = tip + beyond * d * out;
-      if (!(centre.z() > 0)) continue;
+    // The depth measured where the tube's surface `along` * D beyond the tip (inside it where
+    // negative) faces the camera, and that surface's depth; no reading: 0.
+    const auto probe = [&](float along, float* facing_z) {
+      const Eigen::Vector3f centre = tip + along * d * out;
+      if (!(centre.z() > 0)) return 0.0f;
       const Eigen::Vector3f facing = centre - 0.5f * d * centre.normalized();
       const Eigen::Vector2d px = k.project(facing.cast<double>());
       const int x = int(std::lround(px.x())), y = int(std::lround(px.y()));
-      if (!depth.inside(x, y)) continue;
-      const float zo = depth.at(x, y);
-      if (!(zo > 0) || zo < facing.z() - tol) continue;  // no reading, or something in front
+      *facing_z = facing.z();
+      return depth.inside(x, y) ? depth.at(x, y) : 0.0f;
+    };
+    int free = 0, going_on = 0, probes = 0;
+    for (const float beyond : kEndProbesOfD) {
+      float facing_z = 0;
+      const float zo = probe(beyond, &facing_z);
+      if (!(zo > 0) || zo < facing_z - tol) continue;  // no reading, or something in front
       ++probes;
-      free += zo > facing.z() + tol;
-      going_on += zo <= facing.z() + tol;
+      free += zo > facing_z + tol;
+      going_on += zo <= facing_z + tol;
     }
     if (probes == 0) continue;
-    v->ends_pinned += free == probes;
+    bool tip_hidden = false;
+    for (const float inside : kTipProbesOfD) {
+      float facing_z = 0;
+      const float zo = probe(-inside, &facing_z);
+      tip_hidden = tip_hidden || (zo > 0 && zo < facing_z - tol);
+    }
+    v->ends_pinned += free == probes && !(tip_must_show && tip_hidden);
     v->ends_continued += going_on == probes;
   }
 }

@@ -67,9 +67,12 @@ Verification verify_pose(const Mesh& mesh, Winding winding, const Pose& model_to
 // centreline (model frame, ordered from one end to the other; tube diameter d_mm), the surface a
 // continued tube would show the camera is compared with the depth measured there: farther than
 // tolerance_mm is an end the image pins, within it a tube going on. Fills ends_pinned and
-// ends_continued of *v.
+// ends_continued of *v. With tip_must_show, an end is pinned only where nothing lies in front of
+// the tube at its tip and half a diameter inside it: an end hidden under another pipe is not
+// shown ending there, whatever lies beyond.
 void judge_ends(const std::vector<Eigen::Vector3f>& centreline, float d_mm, const Pose& model_to_cam,
-                const Image<float>& depth_mm, const Intrinsics& k, float tolerance_mm, Verification* v);
+                const Image<float>& depth_mm, const Intrinsics& k, float tolerance_mm, Verification* v,
+                bool tip_must_show = false);
 // Beyond the paper: two poses told apart by the image. Where their renders (depth in each box,
 // 0 where not drawn) differ by more than tolerance_mm, each pixel speaks for the pose whose
 // surface the sensor measured there, or against one it saw through; rims are left out (lateral
