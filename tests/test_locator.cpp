@@ -65,22 +65,22 @@ TEST(Locator, KeepsNoReferenceToTheCallersConfig) {
     EXPECT_TRUE(out.estimates[i].model_to_cam.isApprox(expected.estimates[i].model_to_cam, 1e-9));
 }
 
-// A near-symmetric pipe (a half-turn swaps its ends and lands its surface within D/4 of itself):
-// where a pile shows only the common surface, the image cannot tell the pose from its twin. No
-// pose handed out as pickable may be the twin of a pipe instead of the pipe (106 mm off at the
-// ends): either the right one is taken or the estimate loses its confidence. Without the twin
-// judged, 13 of 40 pickable poses on these 12 piles were twins; with it, 1 of 7 (a twin the image
-// confirms better than the pipe's own pose, 0.92 against 0.75 agreement).
+// A near-symmetric pipe (a half-turn swaps its ends and lands its surface within D/4 of itself): where a
+// pile shows only the common surface, the image cannot tell the pose from its twin. No pose handed out as
+// pickable may be the twin of a pipe instead of the pipe (106 mm off at the ends): either the right one is
+// taken or the estimate loses its confidence. Without the twin judged, 13 of 40 pickable poses on these 12
+// piles were twins; with it, when first measured, 1 of 7 (a twin the image confirms better than the pipe's
+// own pose, 0.92 against 0.75 agreement).
 TEST(Locator, NoPickablePoseIsTheTwinOfANearSymmetricPipe) {
   const PipeModel model = pipe_of("S30,B120r45t90,B90r45t90,S30", 16, "coil");
-  ASSERT_EQ(model.near_symmetries.size(), 1u);
-  const Pose& twin = model.near_symmetries[0];
+  ASSERT_GE(model.near_symmetries.size(), 1u);
   int twins_picked = 0;
   const int pickable = for_each_pickable(model, 20, 12, [&](const PipeEstimate& e, const SimulatedScene& s) {
     double at_truth = 1e9, at_twin = 1e9;
     for (std::size_t g = 0; g < s.model_to_world.size(); ++g) {
       at_truth = std::min(at_truth, pose_error(model, e.model_to_cam, s.model_to_cam(g)));
-      at_twin = std::min(at_twin, pose_error(model, e.model_to_cam, s.model_to_cam(g) * twin));
+      for (const Pose& twin : model.near_symmetries)
+        at_twin = std::min(at_twin, pose_error(model, e.model_to_cam, s.model_to_cam(g) * twin));
     }
     twins_picked += at_truth > 10 && at_twin < 5;
   });
@@ -178,7 +178,7 @@ TEST(Locator, NoPickablePoseIsAnArcSlidAlongItself) {
 // tube goes on beyond both ends of a pose, the pipe lies elsewhere. A 3-D bend with neither,
 // alone on the floor: its picks show both ends where they are.
 TEST(Locator, EveryPipesEndsAreRead) {
-  const PipeModel model = pipe_of("S15,B-40r30,S60,B120r25t70,S8", 16, "3-D bend");
+  const PipeModel model = pipe_of("S60,B-40r30,S10,B120r25t70,S8", 16, "3-D bend");
   ASSERT_TRUE(model.near_symmetries.empty());
   int pickable = 0, ends_pinned = 0;
   for (unsigned seed = 40; seed < 43; ++seed) {

@@ -9,6 +9,7 @@
 #include <unordered_map>
 
 #include "model/neighbors.hpp"
+#include "model/slides.hpp"
 #include "model/stl.hpp"
 
 namespace pipeloc {
@@ -357,7 +358,7 @@ std::vector<Pose> find_symmetries(const SurfaceSamples& surface, const Eigen::Ve
 
 std::vector<Pose> find_near_symmetries(const SurfaceSamples& surface, const Eigen::Vector3f& centroid,
                                        float tolerance_mm, float min_share, const std::vector<Pose>& exclude,
-                                       float exclude_mm) {
+                                       float exclude_mm, const std::vector<Pose>& starts) {
   std::vector<Pose> found;
   if (surface.points.size() < 10) return found;
   const IndexedSurface indexed(surface, centroid);
@@ -372,8 +373,8 @@ std::vector<Pose> find_near_symmetries(const SurfaceSamples& surface, const Eige
     }
     return worst;
   };
-  for (int axis = 0; axis < 3; ++axis) {
-    Pose m = half_turn(indexed.axes.col(axis), centroid);
+  for (std::size_t start = 0; start < 3 + starts.size(); ++start) {
+    Pose m = start < 3 ? half_turn(indexed.axes.col(int(start)), centroid) : starts[start - 3];
     // Refined on the part it maps onto itself: pairs are gated, from a tube diameter's worth of
     // distance (4 tolerances) down to the tolerance, so the parts that differ do not pull.
     float share = 0;
@@ -454,9 +455,13 @@ PipeModel derive_pipe_model(Mesh mesh, const std::string& source, const ModelDer
   // The samples' spacing: a mapped sample lands between samples, up to this far from the nearest.
   const float spacing_mm = std::sqrt(area / float(model.surface.points.size()));
   model.symmetries = find_symmetries(model.surface, model.centroid, model.symmetry_tolerance_mm, spacing_mm);
+  // Besides the half-turns about the principal axes: the centreline reversed about the middle of
+  // the part its two ends share (a U with legs of 378 and 118 mm: its principal axes lie askew
+  // of its symmetry, and the refinement does not reach it from there).
+  const std::vector<Pose> reversal = {best_reversal(centreline_of(model.surface, model.tube_diameter_mm))};
   model.near_symmetries = find_near_symmetries(
       model.surface, model.centroid, params.near_symmetry_tolerance_of_diameter * model.tube_diameter_mm,
-      params.near_symmetry_min_share, model.symmetries, model.tube_diameter_mm);
+      params.near_symmetry_min_share, model.symmetries, model.tube_diameter_mm, reversal);
   return model;
 }
 

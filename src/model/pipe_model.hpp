@@ -72,11 +72,12 @@ Eigen::Matrix3d principal_axes(const std::vector<Eigen::Vector3f>& points, const
 // within tolerance_mm of the surface; spacing_mm is the samples' spacing (mesh discretisation).
 std::vector<Pose> find_symmetries(const SurfaceSamples& surface, const Eigen::Vector3f& centroid,
                                   float tolerance_mm, float spacing_mm);
-// The half-turns about the principal axes, each refined on the surface it maps onto itself, that
-// bring at least min_share of the samples within tolerance_mm of the surface; those within
-// `exclude_mm` (largest sample displacement) of one of `exclude` are left out.
+// The half-turns about the principal axes, and the motions in `starts`, each refined on the
+// surface it maps onto itself, that bring at least min_share of the samples within tolerance_mm of
+// the surface; those within `exclude_mm` (largest sample displacement) of one of `exclude` or of
+// one found before are left out.
 std::vector<Pose> find_near_symmetries(const SurfaceSamples& surface, const Eigen::Vector3f& centroid,
                                        float tolerance_mm, float min_share, const std::vector<Pose>& exclude,
-                                       float exclude_mm);
+                                       float exclude_mm, const std::vector<Pose>& starts = {});
 
 }  // namespace pipeloc

@@ -117,6 +117,38 @@ Centreline centreline_of(const SurfaceSamples& surface, float d) {
   return out;
 }
 
+Pose best_reversal(const Centreline& line) {
+  const int n = int(line.points.size());
+  Pose best = Pose::Identity();
+  if (n < 8) return best;
+  constexpr int kCentresTried = 200;  // the centre every (n / 200) points: a fraction of D apart
+  const int step = std::max(1, n / kCentresTried);
+  double best_cost = std::numeric_limits<double>::infinity();
+  for (int c = n / 4; c <= n - 1 - n / 4; c += step) {
+    const int m = std::min(c, n - 1 - c);  // pairs each side: c - u with c + u
+    Eigen::Matrix3Xd from(3, 2 * m), to(3, 2 * m);
+    for (int u = 1; u <= m; ++u) {
+      const Eigen::Vector3d a = line.points[std::size_t(c - u)].cast<double>();
+      const Eigen::Vector3d b = line.points[std::size_t(c + u)].cast<double>();
+      from.col(2 * (u - 1)) = a, to.col(2 * (u - 1)) = b;
+      from.col(2 * (u - 1) + 1) = b, to.col(2 * (u - 1) + 1) = a;
+    }
+    Pose m_pose;
+    m_pose.matrix() = Eigen::umeyama(from, to, false);
+    if (!m_pose.matrix().allFinite()) continue;
+    m_pose.linear() = nearest_rotation(m_pose.linear());
+    double sq = 0;
+    for (int i = 0; i < 2 * m; ++i) sq += (m_pose * from.col(i) - to.col(i)).squaredNorm();
+    // Ties (an arc, a coil, a straight run map onto themselves reversed about any of their
+    // points) go to the middle: a millimetre of fit per 100 mm of the line left unshared.
+    constexpr double kUnsharedWeight = 0.01;
+    const double cost =
+        std::sqrt(sq / double(2 * m)) + kUnsharedWeight * double(n - 1 - 2 * m) * line.step_mm;
+    if (cost < best_cost) best_cost = cost, best = m_pose;
+  }
+  return best;
+}
+
 std::vector<Slide> find_slides(const SurfaceSamples& surface, const Centreline& line, float d,
                                const std::vector<float>& arc_mm, float tolerance_mm, float min_share) {
   std::vector<Slide> found;

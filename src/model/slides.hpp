@@ -21,6 +21,13 @@ struct Centreline {
 };
 Centreline centreline_of(const SurfaceSamples& surface, float tube_d_mm);
 
+// The rigid motion taking the centreline onto itself reversed about one of its points (least
+// squares over the part both sides of it share, at least half the line), at the point where that
+// fits best: a pipe whose two ends differ (a U or a bend with unequal legs) maps nearly onto
+// itself so about the middle of the part they share, which its principal axes miss. Identity
+// when the line is too short.
+Pose best_reversal(const Centreline& centreline);
+
 struct Slide {
   Pose motion;            // model frame to model frame
   float arc_mm = 0;       // how far along the centreline it moves (signed)
