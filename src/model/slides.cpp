@@ -121,7 +121,7 @@ Pose best_reversal(const Centreline& line) {
   const int n = int(line.points.size());
   Pose best = Pose::Identity();
   if (n < 8) return best;
-  constexpr int kCentresTried = 200;  // the centre every (n / 200) points: a fraction of D apart
+  constexpr int kCentresTried = 200;  // centres tried at most: every L / 200 along the line
   const int step = std::max(1, n / kCentresTried);
   double best_cost = std::numeric_limits<double>::infinity();
   for (int c = n / 4; c <= n - 1 - n / 4; c += step) {
