@@ -93,6 +93,38 @@ TEST_F(ScorerTest, DisplacedEstimatesLandOnTheRightSideOfEachBound) {
   }
 }
 
+TEST_F(ScorerTest, MissesListEveryTopPipeNotFoundWithTheNearestEstimate) {
+  const Data& d = data()["sbend"];
+  // Per image: the most visible pipe 7 mm off (a miss at 5 mm, 7 mm from it), every other
+  // top pipe left out (a miss with no estimate near).
+  ResultsFile f;
+  int top = 0;
+  for (const auto& [im, poses] : d.gt) {
+    Pose p = poses[most_visible(d, im)].model_to_cam;
+    p.translation() += Eigen::Vector3d(0.0, 0.6, 0.8) * 7.0;
+    f.rows.push_back({1, im, 1, 1.0, p, 0.01});
+    for (const auto& i : d.info.at(im)) top += i.top ? 1 : 0;
+  }
+  const ScoreReport r = score_results(d.dir->path(), f, {}, nullptr, true);
+  ASSERT_EQ(int(r.misses.size()), top);
+  int displaced = 0;
+  for (const TopMiss& m : r.misses) {
+    const bool is_it = m.gt_index == most_visible(d, m.im_id);
+    if (is_it) {
+      ++displaced;
+      EXPECT_NEAR(m.nearest_mm, 7.0, 1e-6);
+      EXPECT_EQ(m.nearest_rank, 0);
+    } else {
+      EXPECT_GT(m.nearest_mm, 7.0);
+    }
+  }
+  EXPECT_EQ(displaced, int(d.gt.size()));
+  const std::string csv = format_misses(r);
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), top + 1);
+  // Unasked, no list.
+  EXPECT_TRUE(score_results(d.dir->path(), f).misses.empty());
+}
+
 TEST_F(ScorerTest, RotationErrorIsMaxVertexDisplacement) {
   const Data& d = data()["sbend"];
   const Pose truth = d.gt.at(0)[0].model_to_cam;

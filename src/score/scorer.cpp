@@ -45,6 +45,29 @@ std::vector<int> greedy_match(const std::vector<std::vector<double>>& error, std
   return match;
 }
 
+// The top pipes `match` leaves unmatched, each with the estimate nearest to it.
+void add_misses(const ObjectData& obj, const std::vector<const ResultRow*>& est,
+                const std::vector<const GtPose*>& gt, const std::vector<const GtInfo*>& info,
+                const std::vector<int>& match, const TopMiss& image, ScoreReport* report) {
+  std::vector<bool> matched(gt.size(), false);
+  for (int g : match)
+    if (g >= 0) matched[g] = true;
+  for (std::size_t g = 0; g < gt.size(); ++g) {
+    if (!info[g]->top || matched[g]) continue;
+    TopMiss m = image;
+    m.gt_index = int(g);
+    m.occ_by_pipes = info[g]->occ_by_pipes;
+    m.visib_fract = info[g]->visib_fract;
+    m.nearest_mm = kMissCapMm;
+    for (std::size_t e = 0; e < est.size(); ++e) {
+      const double d =
+          mssd(obj.vertices, est[e]->model_to_cam, gt[g]->model_to_cam, obj.symmetries, m.nearest_mm);
+      if (d < m.nearest_mm) m.nearest_mm = d, m.nearest_rank = int(e), m.nearest_score = est[e]->score;
+    }
+    report->misses.push_back(m);
+  }
+}
+
 }  // namespace
 
 double ScoreCounts::top_recall(int bound) const {
@@ -77,7 +100,7 @@ void ScoreCounts::add(const ScoreCounts& o) {
 }
 
 ScoreReport score_results(const std::string& dataset, const ResultsFile& results, const ScoreParams& params,
-                          const ResultsFile* picks) {
+                          const ResultsFile* picks, bool list_misses) {
   ScoreReport report;
   std::map<std::tuple<int, int, int>, const ResultRow*> pick_of;
   if (picks) {
@@ -158,6 +181,8 @@ ScoreReport score_results(const std::string& dataset, const ResultsFile& results
       if (bound == kBoundsMm[0]) {
         c.top_matched_5 = top;
         c.best_correct_5 = best_ok;
+        if (list_misses)
+          add_misses(obj, est, gt, info, match, TopMiss{t.scene_id, t.im_id, t.obj_id}, &report);
       } else {
         c.top_matched_10 = top;
         c.best_correct_10 = best_ok;
@@ -230,6 +255,18 @@ std::string format_report(const ScoreReport& r) {
            "such pipe. pick rows malformed: "
         << r.pick_rows_malformed << ", for images not in the targets: " << r.pick_rows_outside_targets
         << ", more than one for an image: " << r.pick_rows_extra << '\n';
+  return out.str();
+}
+
+std::string format_misses(const ScoreReport& r) {
+  std::ostringstream out;
+  out << "scene_id,im_id,obj_id,gt_index,occ_by_pipes,visib_fract,nearest_mm,nearest_rank,nearest_score\n";
+  char line[160];
+  for (const auto& m : r.misses) {
+    std::snprintf(line, sizeof line, "%d,%d,%d,%d,%.3f,%.3f,%.1f,%d,%.3f\n", m.scene_id, m.im_id, m.obj_id,
+                  m.gt_index, m.occ_by_pipes, m.visib_fract, m.nearest_mm, m.nearest_rank, m.nearest_score);
+    out << line;
+  }
   return out.str();
 }
 

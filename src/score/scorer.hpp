@@ -35,7 +35,20 @@ struct ScoreCounts {
   void add(const ScoreCounts& other);
 };
 
+// A top pipe no estimate matched within 5 mm, and how near the nearest came (score --misses).
+struct TopMiss {
+  int scene_id = 0, im_id = 0, obj_id = 0;
+  int gt_index = 0;         // the pipe's place in scene_gt.json's list for the image
+  double occ_by_pipes = 0;  // share of its silhouette covered by other pipes
+  double visib_fract = 0;
+  double nearest_mm = 0;  // MSSD of the nearest estimate (any rank; capped at kMissCapMm)
+  int nearest_rank = -1;  // that estimate's rank by score (0: the highest), -1: no estimate
+  double nearest_score = 0;
+};
+constexpr double kMissCapMm = 500;
+
 struct ScoreReport {
+  std::vector<TopMiss> misses;            // filled when score_results() is asked for them
   std::map<int, ScoreCounts> per_object;  // obj_id -> counts
   std::map<int, std::string> object_names;
   ScoreCounts overall;
@@ -54,8 +67,12 @@ struct ScoreParams {
 
 // Reads ground truth from the dataset; throws IoError if the dataset itself is unreadable.
 // `picks` (optional): the pose handed out per image (eval-bop --picks); no row = DONE_NONE.
+// `list_misses`: also fill report.misses.
 ScoreReport score_results(const std::string& dataset, const ResultsFile& results, const ScoreParams& = {},
-                          const ResultsFile* picks = nullptr);
+                          const ResultsFile* picks = nullptr, bool list_misses = false);
+
+// report.misses as CSV: a header, then one row per missed top pipe.
+std::string format_misses(const ScoreReport& report);
 
 std::string format_report(const ScoreReport& report);
 Json report_to_json(const ScoreReport& report);
