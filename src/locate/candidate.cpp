@@ -372,13 +372,17 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
     return pick_distance_mm(lm, a.model_to_bin, b.model_to_bin, ambiguity_mm) > ambiguity_mm &&
            shared_tube(lm, a.model_to_bin, b.model_to_bin) >= kRivalMinSharedTube;
   };
+  // Beyond the paper: points pair with the model surface that faces the camera (refine_facing_only).
+  const Eigen::Vector3f camera_bin =
+      cfg.refine_facing_only ? Eigen::Vector3f(ctx.bin_to_cam.inverse().translation().cast<float>())
+                             : Eigen::Vector3f::Constant(NAN);
   // Refines a hypothesis on observed points (the region's; a twin's, those the best explains),
   // has the image judge it, and keeps the best two that are more than ambiguity_pose_mm apart.
   // Returns the hypothesis as judged.
   const auto judge = [&](const Pose& start, float ridge_cost_mm, const Eigen::Vector3f* points,
                          int n_points) {
     auto t0 = Clock::now();
-    RefineResult refined = refine_on_surface(lm, start, points, n_points, cfg);
+    RefineResult refined = refine_on_surface(lm, start, points, n_points, cfg, camera_bin);
     int refined_on = n_points;
     buf->times.refine_ms += ms_since(t0);
     t0 = Clock::now();
@@ -395,7 +399,8 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
       if (n >= kMinExplainedPoints) {
         buf->times.verify_ms += ms_since(t0);
         t0 = Clock::now();
-        const RefineResult again = refine_on_surface(lm, refined.pose, buf->explained_pts.data(), n, cfg);
+        const RefineResult again =
+            refine_on_surface(lm, refined.pose, buf->explained_pts.data(), n, cfg, camera_bin);
         buf->times.refine_ms += ms_since(t0);
         t0 = Clock::now();
         const Pose again_to_cam = ctx.bin_to_cam * again.pose;

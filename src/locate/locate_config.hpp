@@ -94,6 +94,9 @@ struct LocateConfig {
   int refine_max_points = 1500;            // observed points used by the refinement
   bool refine_on_explained = true;  // then again on every pixel the refined pose explains (the
                                     // whole pipe seen, not only its region's top strip), if better
+  bool refine_facing_only = true;  // a point pairs only with model surface facing the camera (a
+                                   // reading beside a thin tube is not its hidden underside; not for
+                                   // a pipe that slides along itself: surface_refine.hpp)
   double refine_inlier_mm = 4;     // point-to-plane pairs farther than this are not the pipe
                                    // (0: 1.7 sigma of the frame's measured noise, at least 0.2 D)
   double verify_tolerance_mm = 7;  // depth agreement, 3 sigma of a Kinect-class sensor's noise at 1.1 m

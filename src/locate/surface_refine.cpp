@@ -12,18 +12,23 @@ namespace {
 constexpr float kHuberMm = 1.5f;
 // Fewer inliers than this cannot hold six degrees of freedom against the noise: stop.
 constexpr int kMinInliers = 12;
-// Levenberg-Marquardt damping, a share of each unknown's own weight, for a straight tube: points
-// on its side fix neither the slide along its axis nor the turn about it (the normal equations
-// are singular there), and the undamped solve moved such a pose metres in one step. Arcs and
-// coils are nearly as free along themselves, but damped they kept slid poses the image could not
-// tell from their pipe (docs/experiments.md, "A straight tube's refinement damped").
-constexpr double kStraightDamping = 1e-3;
+// Levenberg-Marquardt damping, a share of each unknown's own weight. Where the points fix a
+// motion poorly (a straight tube's slide along and turn about its axis, a ring's turn about its
+// centre, a short bend's turn about its length) the normal equations are near singular, and the
+// undamped solve moved such a pose metres in one step (a torus-like ring of the dev set, 58 such
+// steps in one frame). Not for arcs and coils: their slides along themselves are judged apart
+// (judge_slides), and damped they kept slid poses the image could not tell from their pipe
+// (docs/experiments.md, "A straight tube's refinement damped"; "The refinement pairs points with
+// the surface the camera sees").
+constexpr double kDamping = 1e-3;
 
 }  // namespace
 
 RefineResult refine_on_surface(const LocatorModel& lm, const Pose& start, const Eigen::Vector3f* obs, int n,
-                               const LocateConfig& cfg) {
+                               const LocateConfig& cfg, const Eigen::Vector3f& camera_bin) {
   RefineResult res;
+  const bool slides = !lm.straight && !lm.slides.empty();  // an arc or a coil
+  const bool facing_only = camera_bin.allFinite() && lm.slides.empty();
   res.pose = start;
   const float inlier = float(cfg.refine_inlier_mm);
   // Coarse to fine: all but the last kFineIterations use every third point; the last (and the
@@ -58,6 +63,11 @@ RefineResult refine_on_surface(const LocatorModel& lm, const Pose& start, const 
         const Eigen::Vector3f diff = q - s->p;
         if (diff.squaredNorm() > inlier * inlier) continue;
         const Eigen::Vector3f nw = r * s->n;
+        if (facing_only) {  // n . v < -slack |v|, v from the sample to the camera, without a root
+          const Eigen::Vector3f v = camera_bin - (r * s->p + t);
+          const float nv = nw.dot(v);
+          if (nv < 0 && nv * nv > kFacingSlack * kFacingSlack * v.squaredNorm()) continue;
+        }
         const Eigen::Vector3f mw = r * s->p + t - c;
         const float res_i = nw.dot(r * diff);  // observed minus model, along the normal
         // Moving the model by (w, v) changes the model point by w x m + v.
@@ -75,7 +85,7 @@ RefineResult refine_on_surface(const LocatorModel& lm, const Pose& start, const 
       }
     }
     a.triangularView<Eigen::StrictlyUpper>() = a.transpose();
-    if (lm.straight) a.diagonal() *= 1.0 + kStraightDamping;
+    if (!slides) a.diagonal() *= 1.0 + kDamping;
     res.inliers = inliers * stride;  // about: only the fine iterations count them all
     res.rms_mm = inliers ? float(std::sqrt(sq / inliers)) : 0.f;
     if (inliers < kMinInliers) break;

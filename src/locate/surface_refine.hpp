@@ -1,6 +1,8 @@
 // Beyond the paper: a point-to-plane refinement of a ridge fit on the whole observed region.
 #pragma once
 
+#include <cmath>
+
 #include "locate/locate_config.hpp"
 #include "locate/locator_model.hpp"
 
@@ -12,8 +14,20 @@ struct RefineResult {
   float rms_mm = 0;
 };
 
-// Point-to-plane ICP of observed points (bin frame) onto the model surface.
+// A model sample whose outward normal turns further than this from the camera (the sine of the
+// angle beyond the silhouette's horizon, about 17 degrees) cannot be what a sensor point saw: the
+// slack keeps the rim, where the tube's lateral place is read, for poses that far off.
+constexpr float kFacingSlack = 0.3f;
+
+// Point-to-plane ICP of observed points (bin frame) onto the model surface. With the camera's
+// centre (bin frame), a point pairs only with a part of the surface that faces the camera: a
+// reading of the floor or a neighbour beside a thin tube otherwise pairs with the tube's hidden
+// underside and turns the fit (docs/experiments.md, "The refinement pairs points with the surface
+// the camera sees"). Not for a pipe that slides along itself (an arc, a coil, a straight run),
+// which its ends place: there it cost the zoo's 252-degree arc 4 of 6 pipes taken and a coil a
+// wrong pick in 6 bins. Without the camera (NaN), with the nearest part of the surface.
 RefineResult refine_on_surface(const LocatorModel& lm, const Pose& start, const Eigen::Vector3f* observed,
-                               int n, const LocateConfig& cfg);
+                               int n, const LocateConfig& cfg,
+                               const Eigen::Vector3f& camera_bin = Eigen::Vector3f::Constant(NAN));
 
 }  // namespace pipeloc
