@@ -45,10 +45,10 @@ struct RegionStats {
   int overlapping = 0;   // grown regions lying mostly in earlier candidate regions: one pipe, not tried again
   int leaked = 0;        // grown over far more than one pipe
   int regrown_after_leak = 0;  // candidates once grown down to the tube's equator only, after a leak
-  int not_convex = 0;    // the cells beside the core do not tilt away from it (floor between pipes)
-  int short_regions = 0; // shorter than a * L (and than short_region_min_extent_of_l * L)
-  int short_candidates = 0;  // candidates shorter than a * L, tried after the long ones
-  int joined = 0;        // long enough once joined to pieces continuing them across gaps
+  int not_convex = 0;          // the cells beside the core do not tilt away from it (floor between pipes)
+  int short_regions = 0;       // shorter than a * L (and than short_region_min_extent_of_l * L)
+  int short_candidates = 0;    // candidates shorter than a * L, tried after the long ones
+  int joined = 0;              // long enough once joined to pieces continuing them across gaps
 };
 
 void reserve_regions(RegionBuffers* rb, const ZBuffer& zb, const LocateConfig& cfg, float tube_d_mm,
@@ -60,9 +60,15 @@ void reserve_regions(RegionBuffers* rb, const ZBuffer& zb, const LocateConfig& c
 void mark_upward_rows(const ZBuffer& zb, const NormalMap& nm, const LocateConfig& cfg, int row_begin,
                       int row_end, RegionBuffers* rb);
 
-// Fills rb->candidates, best first (largest core first). Every row must have been marked
-// (mark_upward_rows) for this frame's normals. Each candidate is complete when
-// on_found(context, candidates so far) is called after it (another thread may work it from then on).
+// The share of the cells (Z-buffer indices) under something: with a cell one diameter d away,
+// in any of the 8 directions, more than d / 2 higher (another pipe lying across). Candidates are
+// tried by core area times the share not under anything, squared.
+float share_under_others(const ZBuffer& zb, const int* cells, int n, float d);
+
+// Fills rb->candidates, best first (the largest cores least under other pipes first). Every row
+// must have been marked (mark_upward_rows) for this frame's normals. Each candidate is complete
+// when on_found(context, candidates so far) is called after it (another thread may work it from
+// then on).
 using OnCandidateFound = void (*)(void* context, int found);
 RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, const LocateConfig& cfg,
                                       float tube_d_mm, float extent_l_mm, RegionBuffers* rb,
