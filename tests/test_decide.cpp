@@ -306,5 +306,22 @@ TEST(Decide, ThresholdsComeFromTheConfig) {
   EXPECT_FALSE(decide(judged_with_rival(seen(900, 0, 0), seen(860, 0, 0)), cfg).ambiguous);
 }
 
+// A pose turned about the pipe's length takes the found one's place only where the image shows
+// its ends no worse: frame 22 of a 23-planar bin (bin seed 1022) had the found pose pin an end
+// (quality 0.840) and its half-turn, laid over the pipe running out of the view, pin none (0.909):
+// the turn was handed out, 330 mm off.
+TEST(Decide, ATurnAboutItsLengthReplacesThePoseOnlyWhereItsEndsShowNoWorse) {
+  const auto ends = [](int pinned, int continued) {
+    Verification v = seen(900, 0, 0);
+    v.ends_pinned = pinned, v.ends_continued = continued;
+    return v;
+  };
+  EXPECT_FALSE(turn_may_replace(ends(0, 0), ends(1, 0)));  // the frame above
+  EXPECT_TRUE(turn_may_replace(ends(1, 0), ends(1, 0)));
+  EXPECT_TRUE(turn_may_replace(ends(2, 0), ends(1, 0)));
+  EXPECT_TRUE(turn_may_replace(ends(0, 0), ends(0, 0)));  // neither shows an end: the image decides
+  EXPECT_FALSE(turn_may_replace(ends(1, 1), ends(0, 0)));  // the tube goes on beyond the turn's end
+}
+
 }  // namespace
 }  // namespace pipeloc

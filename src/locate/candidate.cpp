@@ -131,6 +131,10 @@ const char* outcome_name(CandidateOutcome o) {
   return "?";
 }
 
+bool turn_may_replace(const Verification& turned, const Verification& found) {
+  return ends_shown(turned) >= ends_shown(found);
+}
+
 Decision decide(const Evidence& given, const LocateConfig& cfg) {
   Decision out;
   // Beyond the paper: of two poses the image confirms about as well (a near twin), the one whose
@@ -379,8 +383,9 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
   // Refines a hypothesis on observed points (the region's; a twin's, those the best explains),
   // has the image judge it, and keeps the best two that are more than ambiguity_pose_mm apart.
   // Returns the hypothesis as judged.
+  // A turn of the found pose about its length (is_turn) replaces it only as turn_may_replace() says.
   const auto judge = [&](const Pose& start, float ridge_cost_mm, const Eigen::Vector3f* points,
-                         int n_points) {
+                         int n_points, bool is_turn = false) {
     auto t0 = Clock::now();
     RefineResult refined = refine_on_surface(lm, start, points, n_points, cfg, camera_bin);
     int refined_on = n_points;
@@ -435,6 +440,7 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
     e.refine_rms_mm = refined.rms_mm;
     e.candidate = in.index;
     const float q = hypothesis_quality(e.check);
+    if (is_turn && have_best && !turn_may_replace(e.check, best.check)) return e;
     if (!have_best || q > hypothesis_quality(best.check)) {
       if (have_best && rivals(best, e))
         second = best, have_second = true;
@@ -503,7 +509,7 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
     const float found_cost_mm = best.ridge_cost_mm;
     for (std::size_t k = 0; k < lm.rolls.size() && n_turned < kTurns; ++k) {
       if (deadline.passed()) return out;
-      turned[n_turned++] = judge(found * lm.rolls[k], found_cost_mm, buf->region_pts.data(), refine_count);
+      turned[n_turned++] = judge(found * lm.rolls[k], found_cost_mm, buf->region_pts.data(), refine_count, true);
     }
     const float roll_mm = float(cfg.roll_ambiguity_mm);
     for (std::size_t k = 0; k < n_turned && !out.roll_unsure; ++k)
