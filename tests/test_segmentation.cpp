@@ -76,15 +76,18 @@ TEST(Segmentation, CandidateCoresLieOnTopPipes) {
   const SimulatedScene s = pile_of(model, 12, 21);
   LocateConfig cfg;
   Locator loc(model, cfg, s.camera.intrinsics);
-  loc.locate(s.depth_mm, s.camera);
+  const LocateOutput& out = loc.locate(s.depth_mm, s.camera);
   const auto& rb = loc.regions();
-  ASSERT_GE(rb.candidates.size(), 1u);
+  // The cores tried again last (retry_claimed_cores) are a second chance, not the ranking's choice.
+  const std::size_t ranked = rb.candidates.size() - std::size_t(out.regions.retried_claimed);
+  ASSERT_GE(ranked, 1u);
   // Each core cell is attributed to the pipe whose surface it lies on; a candidate's core must be
   // mostly one pipe, and that pipe little covered by others.
   // (A core straddling two pipes that touch along their tops, where the valley split does not
   // separate them, happens: at most one candidate in ten, and never fewer than 70 % on top.)
   int on_top = 0, mixed = 0;
-  for (const auto& cand : rb.candidates) {
+  for (std::size_t c = 0; c < ranked; ++c) {
+    const auto& cand = rb.candidates[c];
     const std::vector<int> votes = pipe_votes(loc, s, &rb.core_cells[std::size_t(cand.core_begin)],
                                               cand.core_end - cand.core_begin, 3.0f);
     const std::size_t best = most_voted(votes);
@@ -92,8 +95,8 @@ TEST(Segmentation, CandidateCoresLieOnTopPipes) {
     mixed += votes[best] <= core * 7 / 10;
     on_top += s.info[best].occ_by_pipes <= 0.15;
   }
-  EXPECT_LE(mixed, std::max(1, int(rb.candidates.size()) / 10));
-  EXPECT_GE(on_top * 10, int(rb.candidates.size()) * 7);
+  EXPECT_LE(mixed, std::max(1, int(ranked) / 10));
+  EXPECT_GE(on_top * 10, int(ranked) * 7);
 }
 
 // Beyond the paper: candidates are tried by core area times the share of the core not under
@@ -218,6 +221,51 @@ TEST(Segmentation, TouchingPipesSideBySideGetACoreEach) {
   EXPECT_LE(both_paper, kFrames / 4) << "the two tops should mostly join into a core too long";
   EXPECT_GE(both_split, both_paper + kFrames / 4);
   EXPECT_EQ(off_pipe, 0) << "a candidate core not on a pipe (the floor split into pieces)";
+}
+
+// Beyond the paper: two short tubes (16.7 mm, 69 mm long, as 09-S-sym of the zoo) side by side,
+// touching, one resting 1.4 radii higher (on something beneath). Their cores stay apart, but the
+// region grown from the higher one reaches down over the lower one's core, which the paper then
+// never tries (3 of 20 cores in a 09-S-sym image). Tried again after all the others
+// (retry_claimed_cores), the lower pipe gets a candidate of its own in some frames (most such
+// regions are too flat on the side of the higher pipe to pass as convex).
+TEST(Segmentation, ACoreUnderANeighboursRegionIsTriedLast) {
+  const PipeModel model = pipe_of("S69", 16.7, "short");
+  const double r = 16.7 / 2;
+  LocateConfig once;
+  once.retry_claimed_cores = false;
+  const LocateConfig cfg;
+  constexpr int kFrames = 8;
+  int both_once = 0, both = 0, claimed = 0, retried = 0;
+  for (int frame = 0; frame < kFrames; ++frame) {
+    std::mt19937 rng(unsigned(200 + frame));
+    SceneParams params;
+    const SimulatedScene s = render_scene(
+        model, {lying_straight(model, 0, 0, -r - 0.1, 2.4 * r + 0.5), lying_straight(model, 0, 0, r + 0.1, r + 0.5)},
+        params, rng);
+    const auto pipes_with_a_core = [&](const LocateConfig& c) {
+      Locator loc(model, c, s.camera.intrinsics);
+      const RegionStats& stats = loc.locate(s.depth_mm, s.camera).regions;
+      claimed += stats.claimed, retried += stats.retried_claimed;
+      const auto& rb = loc.regions();
+      bool on[2] = {false, false};
+      for (const auto& cand : rb.candidates) {
+        const int core = cand.core_end - cand.core_begin;
+        const std::vector<int> votes =
+            pipe_votes(loc, s, &rb.core_cells[std::size_t(cand.core_begin)], core, 3.0f);
+        const std::size_t best = most_voted(votes);
+        on[best] = on[best] || votes[best] > core * 7 / 10;
+      }
+      return int(on[0]) + int(on[1]);
+    };
+    both_once += pipes_with_a_core(once) == 2;
+    both += pipes_with_a_core(cfg) == 2;
+  }
+  std::printf("frames with a candidate core on each pipe: once %d of %d, tried again %d (cores claimed %d, "
+              "tried again as candidates %d)\n",
+              both_once, kFrames, both, claimed, retried);
+  EXPECT_GT(claimed, 0) << "the higher pipe's region should reach over the other's core";
+  EXPECT_GT(both, both_once);
 }
 
 // Beyond the paper: a pipe lying across another cuts the lower one's top strip in two, each

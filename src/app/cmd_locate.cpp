@@ -126,12 +126,13 @@ void add_locate(CLI::App& app) {
     spdlog::info(
         "{} pipes found ({} candidate regions ({} of pieces joined across gaps, {} shorter than a * L "
         "tried last, {} grown again to the equator after leaking), {} cores ({} split off touching "
-        "pipes, {} standing on the floor), {} of them in a larger one's region, {} grown mostly into "
+        "pipes, {} standing on the floor), {} of them in a larger one's region ({} tried last), {} grown "
+        "mostly into "
         "earlier regions; {} too short, {} not convex, {} leaked) in {:.1f} ms; pick: {}",
         out.estimates.size(), out.regions.candidates, out.regions.joined, out.regions.short_candidates,
         out.regions.regrown_after_leak, out.regions.cores_kept, out.regions.split_cores,
-        out.regions.raised_cores, out.regions.claimed, out.regions.overlapping, out.regions.short_regions,
-        out.regions.not_convex, out.regions.leaked, out.times.total_ms,
+        out.regions.raised_cores, out.regions.claimed, out.regions.retried_claimed, out.regions.overlapping,
+        out.regions.short_regions, out.regions.not_convex, out.regions.leaked, out.times.total_ms,
         pick >= 0 ? "rank " + std::to_string(pick) : std::string("none"));
     const StageTimes& st = out.times;
     if (out.noise.samples > 0)
@@ -177,9 +178,10 @@ void add_eval_bop(CLI::App& app) {
   cmd->add_option("--config", opt->config, "TOML config ([locate] thresholds)");
   cmd->add_option("--match", opt->match, "zridge (the paper) or surface (whole visible surface)")
       ->check(CLI::IsMember({"zridge", "surface"}));
-  cmd->add_option("--search", opt->search,
-                  "default (beyond the paper) or paper (IV-B's 12 starts at the measured centre, no yaw turns, "
-                  "no sliding)")
+  cmd->add_option(
+         "--search", opt->search,
+         "default (beyond the paper) or paper (IV-B's 12 starts at the measured centre, no yaw turns, "
+         "no sliding)")
       ->check(CLI::IsMember({"default", "paper"}));
   cmd->add_option("--overlays", opt->overlays, "also write an overlay PNG per image into this directory");
   cmd->add_option("--picks", opt->picks,

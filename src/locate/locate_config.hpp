@@ -60,6 +60,9 @@ struct LocateConfig {
                                 // 1 bridges dropouts but costs the dev set 0.012 recall@5)
   double region_max_claimed_share = 0.75;  // a region with more of its cells in earlier candidates'
                                            // regions is another piece of a pipe already tried
+  bool retry_claimed_cores = true;  // a core lying in an earlier candidate's region is grown again
+                                    // after all the others, while there is room (the region over it
+                                    // may be a touching neighbour's; false: the paper's one region)
   double convexity_min_share =
       0.6;  // of the cells grown straight from a core, at least this share tilt away from it
 

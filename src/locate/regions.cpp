@@ -428,10 +428,15 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
   enum class Grown { candidate, claimed, overlapping, leaked, not_convex, too_short };
   int region_pool = 0;
   const float long_extent = float(cfg.region_min_extent_of_l) * l;
+  // Beyond the paper: a core lying mostly in an earlier candidate's region is most often another
+  // piece of that pipe's top, but in a pile it may be a touching neighbour's region grown over it:
+  // with retry_claimed_cores such cores are grown again after all the others, while there is room,
+  // without either claim test (a second region of one pipe is merged into the first when located).
+  bool retrying_claimed = false;
   const auto grow_core = [&](int c, float min_extent, float drop) {
     // A core lying mostly in the region of a larger one is another piece of that pipe's top.
     const int core_count = cores[c].end - cores[c].begin;
-    if (core_mostly_marked(rb->claim, claim, claim + c, c)) return Grown::claimed;
+    if (!retrying_claimed && core_mostly_marked(rb->claim, claim, claim + c, c)) return Grown::claimed;
     // Growth is first held to region_max_reach_of_d * D from the core: a pipe's visible surface
     // lies within about D/2 of its top strip, and a touching pipe then adds a band, not itself.
     // A region too short that way (a top strip broken into pieces) is grown on without the
@@ -562,8 +567,8 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
     if (!found) return leaked ? Grown::leaked : !convex() ? Grown::not_convex : Grown::too_short;
     // A region lying mostly in earlier ones is another piece of a pipe already taken up (a top
     // strip broken into pieces whose cores lay apart).
-    if (float(marked(rb->claim, claim, claim + c, cells, count)) >
-        float(cfg.region_max_claimed_share) * float(count))
+    if (!retrying_claimed && float(marked(rb->claim, claim, claim + c, cells, count)) >
+                                 float(cfg.region_max_claimed_share) * float(count))
       return Grown::overlapping;
     CandidateRegion r;
     r.core_begin = cores[c].begin;
@@ -599,8 +604,12 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
   };
   Deferred short_cores[kMaxCores];
   int n_short = 0;
-  // A region too short waits for the short pass below, with the drop it was grown with.
+  int claimed_cores[kMaxCores];
+  int n_claimed = 0;
+  // A region too short waits for the short pass below, with the drop it was grown with; a core
+  // claimed, for the last pass.
   const auto settle = [&](int c, float drop, Grown g) {
+    if (g == Grown::claimed && cfg.retry_claimed_cores) claimed_cores[n_claimed++] = c;
     if (g == Grown::too_short && short_min_extent < long_extent)
       short_cores[n_short++] = {c, drop};
     else
@@ -635,6 +644,9 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
     else
       count_outcome(g);
   }
+  retrying_claimed = true;
+  for (int k = 0; k < n_claimed && room(); ++k)
+    stats.retried_claimed += grow_core(claimed_cores[k], long_extent, drop_max) == Grown::candidate;
   stats.candidates = int(rb->candidates.size());
   return stats;
 }

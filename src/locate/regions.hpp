@@ -36,14 +36,15 @@ struct RegionBuffers {
 };
 
 struct RegionStats {
-  int core_regions = 0;  // connected upward regions before the area test
-  int cores_kept = 0;    // after area and extent tests
-  int candidates = 0;    // grown regions longer than a * L
-  int claimed = 0;       // cores lying mostly in an earlier candidate region: one pipe, not grown again
-  int split_cores = 0;   // cores kept from too long ones split along valleys (touching pipes)
-  int raised_cores = 0;  // cores kept from one too large (the floor) by standing clear above it
-  int overlapping = 0;   // grown regions lying mostly in earlier candidate regions: one pipe, not tried again
-  int leaked = 0;        // grown over far more than one pipe
+  int core_regions = 0;     // connected upward regions before the area test
+  int cores_kept = 0;       // after area and extent tests
+  int candidates = 0;       // grown regions longer than a * L
+  int claimed = 0;          // cores lying mostly in an earlier candidate region: one pipe, grown last
+  int retried_claimed = 0;  // candidates of such cores, grown after all the others (retry_claimed_cores)
+  int split_cores = 0;      // cores kept from too long ones split along valleys (touching pipes)
+  int raised_cores = 0;     // cores kept from one too large (the floor) by standing clear above it
+  int overlapping = 0;  // grown regions lying mostly in earlier candidate regions: one pipe, not tried again
+  int leaked = 0;       // grown over far more than one pipe
   int regrown_after_leak = 0;  // candidates once grown down to the tube's equator only, after a leak
   int not_convex = 0;          // the cells beside the core do not tilt away from it (floor between pipes)
   int short_regions = 0;       // shorter than a * L (and than short_region_min_extent_of_l * L)
