@@ -63,12 +63,13 @@ RefineResult refine_on_surface(const LocatorModel& lm, const Pose& start, const 
         const Eigen::Vector3f diff = q - s->p;
         if (diff.squaredNorm() > inlier * inlier) continue;
         const Eigen::Vector3f nw = r * s->n;
+        const Eigen::Vector3f pw = r * s->p + t;  // the model point in the bin frame
         if (facing_only) {  // n . v < -slack |v|, v from the sample to the camera, without a root
-          const Eigen::Vector3f v = camera_bin - (r * s->p + t);
+          const Eigen::Vector3f v = camera_bin - pw;
           const float nv = nw.dot(v);
           if (nv < 0 && nv * nv > kFacingSlack * kFacingSlack * v.squaredNorm()) continue;
         }
-        const Eigen::Vector3f mw = r * s->p + t - c;
+        const Eigen::Vector3f mw = pw - c;
         const float res_i = nw.dot(r * diff);  // observed minus model, along the normal
         // Moving the model by (w, v) changes the model point by w x m + v.
         Eigen::Matrix<double, 6, 1> j;
