@@ -174,6 +174,31 @@ TEST(Locator, NoPickablePoseIsAnArcSlidAlongItself) {
   EXPECT_EQ(wrong, 0) << wrong << " of " << pickable << " pickable poses are more than 10 mm off";
 }
 
+// A coil standing on its edge shows the camera its top arc: turned a third of a turn round its
+// helix it shows the same arc (17-coil of the zoo: a pick 112 mm off while clearing). Its rivals
+// are slid far along it too, as far as 60 % of its surface stays on itself; an arc's as well. A
+// bend whose shape changes along it has none.
+TEST(Locator, ACoilIsSlidFarAlongItsHelixToo) {
+  const Intrinsics k;
+  const PipeModel coil = pipe_of("B120r55.7,B120r55.7t15.6,B120r55.7t15.6,B77.6r55.7t15.6", 22.5, "coil");
+  const Locator loc_coil(coil, LocateConfig{}, k);
+  const LocatorModel& lm = loc_coil.locator_model();
+  ASSERT_GT(lm.slides.size(), lm.short_slides);
+  double furthest_deg = 0;
+  for (std::size_t i = lm.short_slides; i < lm.slides.size(); ++i)
+    furthest_deg = std::max(furthest_deg, rotation_angle_deg(Eigen::Matrix3d::Identity(), lm.slides[i].linear()));
+  // The coil's centreline is 425 mm long on a 55.7 mm radius: 40 % of it is 170 mm, 175 degrees.
+  EXPECT_GT(furthest_deg, 80.0);
+  EXPECT_LT(furthest_deg, 180.0);
+  const PipeModel arc = pipe_of("B200r150", 20, "arc");
+  const Locator loc_arc(arc, LocateConfig{}, k);
+  const LocatorModel& lm_arc = loc_arc.locator_model();
+  EXPECT_GT(lm_arc.slides.size(), lm_arc.short_slides);
+  const PipeModel elbow = pipe_of("S40,B90r20,S40", 12, "elbow");
+  const Locator loc_elbow(elbow, LocateConfig{}, k);
+  EXPECT_TRUE(loc_elbow.locator_model().slides.empty());
+}
+
 // The ends of every pipe are read, not only of those that slide or have a near twin: where the
 // tube goes on beyond both ends of a pose, the pipe lies elsewhere. A 3-D bend with neither,
 // alone on the floor: its picks show both ends where they are.

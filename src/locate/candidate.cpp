@@ -521,7 +521,11 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
     const float found_cost_mm = best.ridge_cost_mm;
     // Beyond the paper: a pipe slid along itself (an arc about its centre, a coil along its helix)
     // shows the same surface wherever its ends are not seen: the slid poses are rivals too.
+    // Far slides only for a pose the image confirms: they look for its twin along the pipe, not
+    // for the pipe (the same zoo figures, 5-9 % less time on arcs and coils).
+    const bool confirmed = !(best.check.agreement() < float(cfg.verify_min_agreement));
     for (std::size_t k = 0; cfg.judge_slides && k < lm.slides.size(); ++k) {
+      if (k >= lm.short_slides && !confirmed) break;
       const Pose slid = found * lm.slides[k];
       if (have_second && pick_distance_mm(lm, slid, second.model_to_bin, ambiguity_mm) <= ambiguity_mm)
         continue;

@@ -195,11 +195,23 @@ LocatorModel prepare_locator_model(const PipeModel& model, float margin_mm, cons
     // judged too (a pose 5-45 mm along an arc was handed out as a pick before this check). The
     // tolerance and share are those of the near symmetries: a quarter of D, 60 % of the surface.
     const ModelDerivation near;
+    // Far slides too, doubling from 8 steps as far as near_symmetry_min_share of the surface stays
+    // on itself: a coil standing on its edge, turned a third of a turn round its helix, shows the
+    // camera the same top arc, and was handed out 112 mm from its pipe (17-coil of the zoo).
     const float step = float(std::max(cfg.ambiguity_pose_mm, 0.5 * double(lm.tube_d_mm)));
-    for (const Slide& s : find_slides(model.surface, centreline, lm.tube_d_mm, {1.5f * step, 3.0f * step, 5.0f * step},
-                                      near.near_symmetry_tolerance_of_diameter * lm.tube_d_mm,
-                                      near.near_symmetry_min_share))
-      lm.slides.push_back(s.motion);
+    const float furthest =
+        (1.0f - near.near_symmetry_min_share) * centreline.step_mm * float(centreline.points.size());
+    std::vector<float> far;
+    for (float arc = 8.0f * step; arc <= furthest; arc *= 2.0f) far.push_back(arc);
+    const auto add_slides = [&](const std::vector<float>& arcs) {
+      for (const Slide& s : find_slides(model.surface, centreline, lm.tube_d_mm, arcs,
+                                        near.near_symmetry_tolerance_of_diameter * lm.tube_d_mm,
+                                        near.near_symmetry_min_share))
+        lm.slides.push_back(s.motion);
+    };
+    add_slides({1.5f * step, 3.0f * step, 5.0f * step});
+    lm.short_slides = lm.slides.size();
+    add_slides(far);
   }
   if (lm.centreline_points.size() >= 3 && !lm.straight && lm.slides.empty()) {
     const Eigen::Vector3f c = centroid_of(lm.centreline_points);

@@ -49,7 +49,10 @@ struct LocatorModel {
   std::vector<Pose> canonical_starts;
   // Beyond the paper: the model's slides along itself (model/slides.hpp) by more than the
   // ambiguity distance; the pose found, slid, is judged as a rival (off: judge_slides = false).
+  // The first short_slides move it up to five steps; the others, far along it (a coil a third of
+  // a turn round its helix), as far as its near-symmetry share leaves it on itself.
   std::vector<Pose> slides;
+  std::size_t short_slides = 0;
   // Beyond the paper: quarter turns about the centreline's principal axis through its centroid
   // (none for a straight tube, whose turn about its axis is the same pick, nor for a pipe that
   // slides along itself: turned, it slides onto a pose as good, and its ends place it). A short or nearly
