@@ -199,6 +199,7 @@ void read_locate(Section& s, LocateConfig* c) {
   s.real("core_max_extent_of_l", &c->core_max_extent_of_l, 0.1, 10, "x L");
   s.real("core_valley_turn", &c->core_valley_turn, 0, 2, "difference of unit-normal components");
   s.real("core_split_max_area_of_ld", &c->core_split_max_area_of_ld, 0, 1000, "x L x D");
+  s.real("core_whole_max_extent_of_l", &c->core_whole_max_extent_of_l, 0, 10, "x L");
   s.real("region_min_extent_of_l", &c->region_min_extent_of_l, 0, 2, "x L");
   s.real("short_region_min_extent_of_l", &c->short_region_min_extent_of_l, 0, 2, "x L");
   s.integer("max_short_candidates", &c->max_short_candidates, 0, 256, "regions");

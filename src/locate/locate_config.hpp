@@ -48,6 +48,8 @@ struct LocateConfig {
   double core_valley_turn = 0.5;        // ... unless it splits where the normals D/4 either side turn
                                         // towards each other by more (unit-normal components; 0: off)
   double core_split_max_area_of_ld = 8;  // ... and is not larger than this * L * D (else it is floor)
+  double core_whole_max_extent_of_l = 2.3;  // a core too long that no valley splits is kept whole up to
+                                            // this * L (two pipes end to end; 0: dropped, the paper's)
   double region_min_extent_of_l = 0.7;  // a of the paper
   double short_region_min_extent_of_l = 0.5;  // shorter regions down to this * L are tried after the
                                               // others (region_min_extent_of_l: off, the paper's cut)

@@ -152,6 +152,7 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
   const float cell_area = float(zb.pixel_mm * zb.pixel_mm);
   const float area_min = float(cfg.core_min_area_of_d2) * d * d;
   const float core_extent_max = float(cfg.core_max_extent_of_l) * l;
+  const float whole_extent_max = float(cfg.core_whole_max_extent_of_l) * l;
   const float up_min = float(std::cos(cfg.upward_normal_max_deg * kDeg));
   const int bridge_cells = int(cfg.hole_bridge_of_d * d / zb.pixel_mm);
 
@@ -296,9 +297,21 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
         });
         continue;
       }
-      // ... unless, too long, it falls apart along valleys into pieces that are cores.
-      if (valley_turn > 0)
-        stats.split_cores += split_core(begin, end, [&](int ci, int cj) { return !in_valley(ci, cj); });
+      // ... unless, too long, it falls apart along valleys into pieces that are cores ...
+      const int pieces =
+          valley_turn > 0 ? split_core(begin, end, [&](int ci, int cj) { return !in_valley(ci, cj); }) : 0;
+      stats.split_cores += pieces;
+      // ... or, beyond the paper, no longer than core_whole_max_extent_of_l * L, it is kept whole:
+      // pipes lying end to end, touching at the same height, show one top strip and no valley
+      // between them; the ridge fit takes one pipe out of it (09-S-sym of the zoo: 19 of 66
+      // pipes missed had no core of their own). A failed split left the pool and the core's
+      // cells as they were.
+      if (pieces == 0 && pool == begin && n_cores < kMaxCores && whole_extent_max > 0 &&
+          !box.longer_than(whole_extent_max, zb, &rb->core_cells[begin], end - begin)) {
+        pool = end;
+        cores[n_cores++] = {begin, end, core_area, false};
+        ++stats.whole_long_cores;
+      }
     }
   }
   stats.cores_kept = n_cores;

@@ -42,6 +42,7 @@ struct RegionStats {
   int claimed = 0;          // cores lying mostly in an earlier candidate region: one pipe, grown last
   int retried_claimed = 0;  // candidates of such cores, grown after all the others (retry_claimed_cores)
   int split_cores = 0;      // cores kept from too long ones split along valleys (touching pipes)
+  int whole_long_cores = 0;  // cores too long that no valley split, kept whole (pipes end to end)
   int raised_cores = 0;     // cores kept from one too large (the floor) by standing clear above it
   int overlapping = 0;  // grown regions lying mostly in earlier candidate regions: one pipe, not tried again
   int leaked = 0;       // grown over far more than one pipe
