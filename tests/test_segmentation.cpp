@@ -181,6 +181,12 @@ Pose lying_straight(const PipeModel& model, double yaw_deg, double x, double y, 
   return p;
 }
 
+// Pipes at the given poses, seen through the sensor model; the camera and the noise drawn from seed.
+SimulatedScene scene_of(const PipeModel& model, const std::vector<Pose>& poses, unsigned seed) {
+  std::mt19937 rng(seed);
+  return render_scene(model, poses, SceneParams{}, rng);
+}
+
 TEST(Segmentation, TouchingPipesSideBySideGetACoreEach) {
   const PipeModel model = pipe_of("S200", 20, "straight");
   const double r = 10;
@@ -295,12 +301,10 @@ TEST(Segmentation, PipesEndToEndGetACandidateFromACoreKeptWhole) {
   };
   int dropped_candidates = 0, whole_candidates = 0, whole_dropped = 0, whole = 0;
   constexpr int kFrames = 4;
+  const std::vector<Pose> end_to_end = {lying_straight(model, 0, -half - 0.1, 0, r + 0.5),
+                                        lying_straight(model, 0, half + 0.1, 0, r + 0.5)};
   for (int frame = 0; frame < kFrames; ++frame) {
-    std::mt19937 rng(unsigned(700 + frame));
-    SceneParams params;
-    const SimulatedScene s = render_scene(
-        model, {lying_straight(model, 0, -half - 0.1, 0, r + 0.5), lying_straight(model, 0, half + 0.1, 0, r + 0.5)},
-        params, rng);
+    const SimulatedScene s = scene_of(model, end_to_end, unsigned(700 + frame));
     dropped_candidates += on_pipes(s, dropped, &whole_dropped);
     whole_candidates += on_pipes(s, cfg, &whole);
   }
