@@ -186,7 +186,8 @@ TEST(Locator, ACoilIsSlidFarAlongItsHelixToo) {
   ASSERT_GT(lm.slides.size(), lm.short_slides);
   double furthest_deg = 0;
   for (std::size_t i = lm.short_slides; i < lm.slides.size(); ++i)
-    furthest_deg = std::max(furthest_deg, rotation_angle_deg(Eigen::Matrix3d::Identity(), lm.slides[i].linear()));
+    furthest_deg =
+        std::max(furthest_deg, rotation_angle_deg(Eigen::Matrix3d::Identity(), lm.slides[i].linear()));
   // The coil's centreline is 425 mm long on a 55.7 mm radius: 40 % of it is 170 mm, 175 degrees.
   EXPECT_GT(furthest_deg, 80.0);
   EXPECT_LT(furthest_deg, 180.0);

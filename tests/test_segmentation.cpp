@@ -294,7 +294,8 @@ TEST(Segmentation, PipesEndToEndGetACandidateFromACoreKeptWhole) {
     int n = 0;
     for (const auto& cand : rb.candidates) {
       const int cells = cand.core_end - cand.core_begin;
-      const std::vector<int> votes = pipe_votes(loc, s, &rb.core_cells[std::size_t(cand.core_begin)], cells, 3.0f);
+      const std::vector<int> votes =
+          pipe_votes(loc, s, &rb.core_cells[std::size_t(cand.core_begin)], cells, 3.0f);
       n += votes[0] + votes[1] > cells * 7 / 10;
     }
     return n;
@@ -308,8 +309,9 @@ TEST(Segmentation, PipesEndToEndGetACandidateFromACoreKeptWhole) {
     dropped_candidates += on_pipes(s, dropped, &whole_dropped);
     whole_candidates += on_pipes(s, cfg, &whole);
   }
-  std::printf("candidates on pipes end to end: core dropped %d, kept whole %d in %d frames (cores kept whole %d)\n",
-              dropped_candidates, whole_candidates, kFrames, whole);
+  std::printf(
+      "candidates on pipes end to end: core dropped %d, kept whole %d in %d frames (cores kept whole %d)\n",
+      dropped_candidates, whole_candidates, kFrames, whole);
   EXPECT_EQ(whole_dropped, 0);
   EXPECT_EQ(dropped_candidates, 0) << "the two tops should make one core too long, not split";
   EXPECT_GE(whole_candidates, kFrames);

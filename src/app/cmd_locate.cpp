@@ -131,8 +131,9 @@ void add_locate(CLI::App& app) {
         "in {:.1f} ms; pick: {}",
         out.estimates.size(), out.regions.candidates, out.regions.joined, out.regions.short_candidates,
         out.regions.regrown_after_leak, out.regions.cores_kept, out.regions.split_cores,
-        out.regions.raised_cores, out.regions.whole_long_cores, out.regions.claimed, out.regions.retried_claimed, out.regions.overlapping,
-        out.regions.short_regions, out.regions.not_convex, out.regions.leaked, out.times.total_ms,
+        out.regions.raised_cores, out.regions.whole_long_cores, out.regions.claimed,
+        out.regions.retried_claimed, out.regions.overlapping, out.regions.short_regions,
+        out.regions.not_convex, out.regions.leaked, out.times.total_ms,
         pick >= 0 ? "rank " + std::to_string(pick) : std::string("none"));
     const StageTimes& st = out.times;
     if (out.noise.samples > 0)

@@ -204,9 +204,9 @@ LocatorModel prepare_locator_model(const PipeModel& model, float margin_mm, cons
     std::vector<float> far;
     for (float arc = 8.0f * step; arc <= furthest; arc *= 2.0f) far.push_back(arc);
     const auto add_slides = [&](const std::vector<float>& arcs) {
-      for (const Slide& s : find_slides(model.surface, centreline, lm.tube_d_mm, arcs,
-                                        near.near_symmetry_tolerance_of_diameter * lm.tube_d_mm,
-                                        near.near_symmetry_min_share))
+      for (const Slide& s :
+           find_slides(model.surface, centreline, lm.tube_d_mm, arcs,
+                       near.near_symmetry_tolerance_of_diameter * lm.tube_d_mm, near.near_symmetry_min_share))
         lm.slides.push_back(s.motion);
     };
     add_slides({1.5f * step, 3.0f * step, 5.0f * step});
