@@ -369,6 +369,43 @@ TEST(StartSlide, BringsAnOffsetStartBackOverTheObservedRidge) {
   }
 }
 
+// A region reaching the image's edge holds part of a pipe whose centre may lie far along it (07-U
+// of the zoo: a leg and half the bend in view). The starts slide along L/4 either way; an offset a
+// step beyond it is brought back only when they may slide L/2 (edge_slide_along_of_l).
+TEST(StartSlide, FurtherAlongTheAxisWhereTheRidgeReachesTheEdge) {
+  const PipeModel& model = preset_model("u");
+  LocateConfig cfg;
+  const LocatorModel lm = prepare_locator_model(model, 8.0f, cfg);
+  const StartSet starts = prepare_starts(lm, cfg);
+  SlideBuffers buf;
+  reserve_slide(&buf, lm, 2000, float(cfg.ridge_cell_mm));
+  const float d = lm.tube_d_mm;
+  Pose truth_frame = Pose::Identity();
+  truth_frame.translation() = Eigen::Vector3d(-60, 30, 900);
+  const int s = 0;
+  std::vector<Eigen::Vector3f> observed, in_axis;
+  const Pose placed = truth_frame * starts.pose[s];
+  for (int i = 0; i < starts.ridge_count(s); ++i)
+    observed.push_back((placed * starts.ridge(s)[i].cast<double>()).cast<float>());
+  buf.observed_top.build(observed.data(), int(observed.size()), starts.cell_mm, d);
+  // One step of the slide's grid (2 D along) beyond the L/4 it reaches.
+  const float step = std::max(float(cfg.start_slide_step_of_d) * d, float(cfg.zbuffer_pixel_mm));
+  const double offset = (int(lm.slide_along_mm / (2 * step)) + 1) * 2.0 * step;
+  ASSERT_LE(offset, cfg.edge_slide_along_of_l * lm.extent_l_mm);
+  Pose frame = truth_frame;
+  frame.translation() += truth_frame.linear().col(0) * offset;
+  for (const auto& p : observed) in_axis.push_back((frame.inverse() * p.cast<double>()).cast<float>());
+  const auto off_mm = [&](float along_mm) {
+    const SlidStart slid =
+        slide_start(lm, starts, s, frame, in_axis.data(), int(in_axis.size()), cfg, &buf, along_mm);
+    return (slid.pose.translation() - placed.translation()).norm();
+  };
+  const double quarter = off_mm(-1), half = off_mm(float(cfg.edge_slide_along_of_l) * lm.extent_l_mm);
+  std::printf("%.0f mm off along the axis: slid L/4 %.0f mm off, L/2 %.0f mm off\n", offset, quarter, half);
+  EXPECT_GT(quarter, d);
+  EXPECT_LT(half, 0.5 * d);
+}
+
 TEST(StartSlide, TopDistanceIsTheHorizontalDistanceUpToItsCap) {
   TopDistance td;
   td.reserve(64);

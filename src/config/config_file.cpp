@@ -218,6 +218,7 @@ void read_locate(Section& s, LocateConfig* c) {
   s.real("initial_yaw_step_deg", &c->initial_yaw_step_deg, 1, 180, "deg");
   s.real("start_slide_step_of_d", &c->start_slide_step_of_d, 0.1, 10, "x D");
   s.boolean("slide_starts", &c->slide_starts);
+  s.real("edge_slide_along_of_l", &c->edge_slide_along_of_l, 0, 2, "x L");
   s.integer("icp_max_iterations", &c->icp_max_iterations, 1, 500, "iterations");
   s.integer("icp_probed_states", &c->icp_probed_states, 1, 10000, "states");
   s.integer("icp_probe_iterations", &c->icp_probe_iterations, 1, 500, "iterations");

@@ -49,6 +49,18 @@ int explained_points(const CandidateContext& ctx, const Image<float>& rendered, 
   return n;
 }
 
+// Whether any of the points (bin frame) is seen within kEdgeMarginPx of the image's border.
+constexpr double kEdgeMarginPx = 3;
+bool reaches_image_edge(const CandidateContext& ctx, const Eigen::Vector3f* pts, int n) {
+  for (int k = 0; k < n; ++k) {
+    const Eigen::Vector2d uv = ctx.camera.project(ctx.bin_to_cam * pts[k].cast<double>());
+    if (uv.x() < kEdgeMarginPx || uv.y() < kEdgeMarginPx || uv.x() > ctx.camera.width - 1 - kEdgeMarginPx ||
+        uv.y() > ctx.camera.height - 1 - kEdgeMarginPx)
+      return true;
+  }
+  return false;
+}
+
 // RidgeFit::seen_through of a fit RidgeIcp::fit has just returned (its model ridge is still there).
 float seen_through(const CandidateContext& ctx, const RidgeFit& f, const CandidateBuffers& buf) {
   return seen_through_share(ctx.zb, buf.icp.model_ridge(), f.model_ridge_points,
@@ -280,9 +292,15 @@ RidgeFits fit_ridges(const CandidateContext& ctx, const CandidateInput& in, cons
   const RidgeView fine_ridge{in.ridge, observed.count, axis.axis, float(cfg.ridge_cell_mm)};
   buf->slide.observed_top.build(buf->coarse_ridge.data(), n_coarse, probe_cell, d);
   buf->starts.clear();
+  // Beyond the paper: where the observed ridge reaches the image's edge, the pipe may lie anywhere
+  // along it beyond the edge: the starts slide along edge_slide_along_of_l * L instead.
+  const float along_mm =
+      cfg.edge_slide_along_of_l > 0 && reaches_image_edge(ctx, buf->coarse_ridge.data(), n_coarse)
+          ? float(cfg.edge_slide_along_of_l) * lm.extent_l_mm
+          : -1.0f;
   for (int s = 0; s < starts.size(); ++s)
-    buf->starts.push_back(
-        slide_start(lm, starts, s, axis_to_bin, buf->coarse_in_axis.data(), n_coarse, cfg, &buf->slide));
+    buf->starts.push_back(slide_start(lm, starts, s, axis_to_bin, buf->coarse_in_axis.data(), n_coarse, cfg,
+                                      &buf->slide, along_mm));
   // ... and those whose ridge covers it best are probed; the most promising continue to convergence.
   std::sort(buf->starts.begin(), buf->starts.end(),
             [](const SlidStart& a, const SlidStart& b) { return a.cost_mm < b.cost_mm; });

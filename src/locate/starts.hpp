@@ -59,9 +59,10 @@ void reserve_slide(SlideBuffers* buf, const LocatorModel& lm, int max_ridge_poin
 // in the bin plane, along and across the observed axis over the model's own extent, to where its
 // ridge best covers the observed one (mean top-view distance both ways, truncated at D).
 // buf->observed_top must hold the observed ridge (TopDistance::build with cap D), and
-// observed_in_axis the observed ridge points in the axis frame.
+// observed_in_axis the observed ridge points in the axis frame. along_mm: how far along the axis
+// either way (< 0: the model's slide_along_mm, L/4).
 SlidStart slide_start(const LocatorModel& lm, const StartSet& starts, int s, const Pose& axis_to_bin,
                       const Eigen::Vector3f* observed_in_axis, int n_observed, const LocateConfig& cfg,
-                      SlideBuffers* buf);
+                      SlideBuffers* buf, float along_mm = -1);
 
 }  // namespace pipeloc
