@@ -363,7 +363,8 @@ TEST(StartSlide, BringsAnOffsetStartBackOverTheObservedRidge) {
     frame.translation() += offset;  // the measured centre is off by `offset`
     in_axis.clear();
     for (const auto& p : observed) in_axis.push_back((frame.inverse() * p.cast<double>()).cast<float>());
-    const SlidStart slid = slide_start(lm, starts, s, frame, in_axis.data(), int(in_axis.size()), cfg, &buf);
+    const SlidStart slid =
+        slide_start(lm, starts, s, frame, in_axis.data(), int(in_axis.size()), cfg, &buf, lm.slide_along_mm);
     EXPECT_LT((slid.pose.translation() - placed.translation()).norm(), 0.5 * d) << offset.transpose();
     EXPECT_LT(slid.cost_mm, 0.25f * d) << offset.transpose();
   }
@@ -400,7 +401,8 @@ TEST(StartSlide, FurtherAlongTheAxisWhereTheRidgeReachesTheEdge) {
         slide_start(lm, starts, s, frame, in_axis.data(), int(in_axis.size()), cfg, &buf, along_mm);
     return (slid.pose.translation() - placed.translation()).norm();
   };
-  const double quarter = off_mm(-1), half = off_mm(float(cfg.edge_slide_along_of_l) * lm.extent_l_mm);
+  const double quarter = off_mm(lm.slide_along_mm),
+               half = off_mm(float(cfg.edge_slide_along_of_l) * lm.extent_l_mm);
   std::printf("%.0f mm off along the axis: slid L/4 %.0f mm off, L/2 %.0f mm off\n", offset, quarter, half);
   EXPECT_GT(quarter, d);
   EXPECT_LT(half, 0.5 * d);

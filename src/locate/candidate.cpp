@@ -297,7 +297,7 @@ RidgeFits fit_ridges(const CandidateContext& ctx, const CandidateInput& in, cons
   const float along_mm =
       cfg.edge_slide_along_of_l > 0 && reaches_image_edge(ctx, buf->coarse_ridge.data(), n_coarse)
           ? float(cfg.edge_slide_along_of_l) * lm.extent_l_mm
-          : -1.0f;
+          : lm.slide_along_mm;
   for (int s = 0; s < starts.size(); ++s)
     buf->starts.push_back(slide_start(lm, starts, s, axis_to_bin, buf->coarse_in_axis.data(), n_coarse, cfg,
                                       &buf->slide, along_mm));

@@ -306,7 +306,7 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
       // between them; the ridge fit takes one pipe out of it (09-S-sym of the zoo: 19 of 66
       // pipes missed had no core of their own). A failed split left the pool and the core's
       // cells as they were.
-      if (pieces == 0 && pool == begin && n_cores < kMaxCores && whole_extent_max > 0 &&
+      if (pieces == 0 && n_cores < kMaxCores && whole_extent_max > 0 &&
           !box.longer_than(whole_extent_max, zb, &rb->core_cells[begin], end - begin)) {
         pool = end;
         cores[n_cores++] = {begin, end, core_area, false};

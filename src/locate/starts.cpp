@@ -87,7 +87,7 @@ SlidStart slide_start(const LocatorModel& lm, const StartSet& starts, int s, con
   const float d = lm.tube_d_mm;
   const float step = std::max(float(cfg.start_slide_step_of_d) * d, float(cfg.zbuffer_pixel_mm));
   const int n_across = cfg.slide_starts ? int(lm.slide_across_mm / step) : 0;
-  const int n_along = cfg.slide_starts ? int((along_mm >= 0 ? along_mm : lm.slide_along_mm) / (2 * step)) : 0;
+  const int n_along = cfg.slide_starts ? int(along_mm / (2 * step)) : 0;
   // Offsets are along (x) and across (y) the observed axis: in the axis frame, and turned into the bin.
   const Eigen::Vector2f along = axis_to_bin.linear().col(0).head<2>().cast<float>().normalized();
   const Eigen::Vector2f across(-along.y(), along.x());
