@@ -118,7 +118,8 @@ struct LocateConfig {
                                            // agreement * (1 - this share) >= verify_min_agreement)
   double verify_max_outside_view_well_seen = 0.5;  // ... or up to this share where what is in view
   double verify_well_seen_agreement = 0.9;         // ... agrees this well (and, where the ends
-                                                   // are read, one end is pinned)
+                                                   // are read, one end is pinned); an ambiguous
+                                                   // pose further out of view is no estimate
   double side_drop_of_d = 0.25;            // a pipe's surroundings lie at least this * D beyond its silhouette ...
   double verify_max_side_level = 0.3;      // ... but for at most this share (more: a smooth blob, not a pipe)
   int verify_hypotheses = 3;               // distinct ridge fits refined and checked per region
