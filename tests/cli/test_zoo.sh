@@ -34,6 +34,16 @@ PY
 "$here/tools/zoo" --bin "$bin" --out "$work/zoo" --shapes 15 --images 2 --reuse --no-clear > "$work/zoo2.txt" 2>&1 ||
   fail "--reuse run failed: $(tail -20 "$work/zoo2.txt")"
 grep -qE '^15-arc ' "$work/zoo2.txt" || fail "--reuse: no row"
+# ... and under the cell's budget, as the service localizes.
+"$here/tools/zoo" --bin "$bin" --out "$work/zoo" --shapes 15 --images 2 --reuse --no-clear --jobs 1 \
+  --budget-ms 250 > "$work/zoo4.txt" 2>&1 || fail "--budget-ms run failed: $(tail -20 "$work/zoo4.txt")"
+grep -q 'under a 250 ms budget' "$work/zoo4.txt" || fail "--budget-ms: not said: $(head -3 "$work/zoo4.txt")"
+grep -qE '^15-arc ' "$work/zoo4.txt" || fail "--budget-ms: no row"
+grep -q -- '--budget-ms 250' "$work/zoo/shapes/15-arc/log.txt" || fail "--budget-ms: not passed to eval-bop"
+if "$here/tools/zoo" --bin "$bin" --out "$work/zoo" --budget-ms -5 > "$work/zoo5.txt" 2>&1; then
+  fail "--budget-ms -5 accepted"
+fi
+grep -q -- '--budget-ms -5' "$work/zoo5.txt" || fail "--budget-ms -5: no message naming it: $(cat "$work/zoo5.txt")"
 # A bad count is refused, naming the option.
 if "$here/tools/zoo" --bin "$bin" --out "$work/zoo" --bins 0 > "$work/zoo3.txt" 2>&1; then fail "--bins 0 accepted"; fi
 grep -q -- '--bins 0' "$work/zoo3.txt" || fail "--bins 0: no message naming it: $(cat "$work/zoo3.txt")"
