@@ -219,8 +219,8 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
        judged_with_rival(outside_view(seen(900, 0, 0), 0.6f), seen(860, 0, 0)), true,
        CandidateOutcome::not_confirmed, true, false, 0},
       {"sliding, no end seen, six tenths out of the view",
-       sliding(judged(outside_view(seen(900, 0, 0), 0.6f)), 0, 0), true, CandidateOutcome::not_confirmed, true,
-       false, 0},
+       sliding(judged(outside_view(seen(900, 0, 0), 0.6f)), 0, 0), true, CandidateOutcome::not_confirmed,
+       true, false, 0},
       // A near twin as good where the image shows the best's ends, and the tube going on beyond
       // one of the twin's: not ambiguous. Ends seen for neither: ambiguous.
       {"twin as good, its end goes on", ends_read(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), 2, 0, 1, 1),

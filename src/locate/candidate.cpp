@@ -194,7 +194,8 @@ Decision decide(const Evidence& given, const LocateConfig& cfg) {
   // An ambiguous pose further out of the view than any pose may be picked is not placed by the
   // image: neither its part out of the view nor its rival's is checked. It is no estimate (the
   // zoo's 16-arc, its arcs reaching out of the view: 10 of its 13 false estimates).
-  const double most_out_of_view = std::max(cfg.verify_max_outside_view, cfg.verify_max_outside_view_well_seen);
+  const double most_out_of_view =
+      std::max(cfg.verify_max_outside_view, cfg.verify_max_outside_view_well_seen);
   if (out.ambiguous && e.best.outside_view > float(most_out_of_view)) {
     out.outcome = CandidateOutcome::not_confirmed;
     return out;
