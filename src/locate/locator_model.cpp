@@ -199,8 +199,7 @@ LocatorModel prepare_locator_model(const PipeModel& model, float margin_mm, cons
     // on itself: a coil standing on its edge, turned a third of a turn round its helix, shows the
     // camera the same top arc, and was handed out 112 mm from its pipe (17-coil of the zoo).
     const float step = float(std::max(cfg.ambiguity_pose_mm, 0.5 * double(lm.tube_d_mm)));
-    const float furthest =
-        (1.0f - near.near_symmetry_min_share) * centreline.step_mm * float(centreline.points.size());
+    const float furthest = (1.0f - near.near_symmetry_min_share) * centreline.length_mm();
     std::vector<float> far;
     for (float arc = 8.0f * step; arc <= furthest; arc *= 2.0f) far.push_back(arc);
     const auto add_slides = [&](const std::vector<float>& arcs) {
