@@ -303,10 +303,10 @@ RidgeFits fit_ridges(const CandidateContext& ctx, const CandidateInput& in, cons
   buf->starts.clear();
   // Beyond the paper: where the observed ridge reaches the image's edge, the pipe may lie anywhere
   // along it beyond the edge: the starts slide along edge_slide_along_of_l * L instead.
-  const float along_mm =
-      cfg.edge_slide_along_of_l > 0 && reaches_image_edge(ctx, buf->coarse_ridge.data(), n_coarse)
-          ? float(cfg.edge_slide_along_of_l) * lm.extent_l_mm
-          : lm.slide_along_mm;
+  const float along_mm = cfg.slide_starts && cfg.edge_slide_along_of_l > 0 &&
+                                 reaches_image_edge(ctx, buf->coarse_ridge.data(), n_coarse)
+                             ? float(cfg.edge_slide_along_of_l) * lm.extent_l_mm
+                             : lm.slide_along_mm;
   for (int s = 0; s < starts.size(); ++s)
     buf->starts.push_back(slide_start(lm, starts, s, axis_to_bin, buf->coarse_in_axis.data(), n_coarse, cfg,
                                       &buf->slide, along_mm));
