@@ -131,8 +131,8 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
       // Above R_th but within residual_rescue_of_rth (1.5) of it: judged by the image instead.
       {"residual above R_th, within the rescue", after_fits(10.4f), false, CandidateOutcome::budget, false,
        false, 0},
-      {"residual above the rescue", after_fits(10.6f), true, CandidateOutcome::residual_too_high, false, false,
-       0},
+      {"residual above the rescue", after_fits(10.6f), true, CandidateOutcome::residual_too_high, false,
+       false, 0},
       {"agreement under 0.7", judged(seen(690, 0, 0)), true, CandidateOutcome::not_confirmed, false, false,
        0},
       {"free space over 0.05", judged(seen(900, 51, 0)), true, CandidateOutcome::not_confirmed, false, false,
@@ -155,8 +155,8 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
       // the share of the whole pipe the image confirms.
       {"accepted and pickable", judged(seen(900, 10, 100)), true, CandidateOutcome::accepted, false, true,
        0.81f},
-      {"sides drop away", judged(with_sides(seen(900, 0, 0), 100, 29)), true,
-       CandidateOutcome::accepted, false, true, 0.9f},
+      {"sides drop away", judged(with_sides(seen(900, 0, 0), 100, 29)), true, CandidateOutcome::accepted,
+       false, true, 0.9f},
       {"too few side pixels to judge", judged(with_sides(seen(900, 0, 0), kMinSidePx - 1, kMinSidePx - 1)),
        true, CandidateOutcome::accepted, false, true, 0.9f},
       {"resting on the floor", judged(below_floor(seen(900, 0, 0), 0.29f)), true, CandidateOutcome::accepted,
@@ -223,10 +223,12 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
        true, false, 0},
       // A near twin as good where the image shows the best's ends, and the tube going on beyond
       // one of the twin's: not ambiguous. Ends seen for neither: ambiguous.
-      {"twin as good, its end goes on", ends_read(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), 2, 0, 1, 1),
-       true, CandidateOutcome::accepted, false, true, 0.9f},
-      {"twin as good, no end seen", ends_read(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), 0, 0, 0, 0),
-       true, CandidateOutcome::accepted, true, false, 0.45f},
+      {"twin as good, its end goes on",
+       ends_read(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), 2, 0, 1, 1), true,
+       CandidateOutcome::accepted, false, true, 0.9f},
+      {"twin as good, no end seen",
+       ends_read(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), 0, 0, 0, 0), true,
+       CandidateOutcome::accepted, true, false, 0.45f},
       // Where the two differ, the image shows the best and hardly the rival: not ambiguous.
       {"twin as good, the pixels telling them apart show the best",
        told(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), kMinTellingPx,
@@ -254,6 +256,18 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
       {"rival as good, the tube goes on beyond the best's end",
        ends_read(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), 1, 1, 1, 0), true,
        CandidateOutcome::accepted, false, true, 0.88f, true},
+      // ... or whose ends it shows as well where, of the pixels telling the two apart, it shows
+      // the rival and hardly the best (a Z's twin with its legs swapped, one end out of the view).
+      {"rival as good, the pixels telling them apart show the rival",
+       told(ends_read(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), 1, 0, 1, 0), 0, kMinTellingPx),
+       true, CandidateOutcome::accepted, false, true, 0.88f, true},
+      {"the pixels show the rival, but the image pins the best's end and not the rival's",
+       told(ends_read(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), 1, 0, 0, 0), 0, kMinTellingPx),
+       true, CandidateOutcome::accepted, false, true, 0.9f},
+      {"the pixels show both",
+       told(ends_read(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), 1, 0, 1, 0),
+            kMinTellingPx / kTellingRatio + 1, kMinTellingPx),
+       true, CandidateOutcome::accepted, true, false, 0.45f},
       {"rival as good, its end pinned, but under the floor",
        ends_read(judged_with_rival(seen(900, 0, 0), below_floor(seen(880, 0, 0), 0.31f)), 0, 0, 1, 0), true,
        CandidateOutcome::not_confirmed, false, false, 0, true},

@@ -76,6 +76,10 @@ bool as_good(const Verification& rival, const Verification& best, const LocateCo
 // going on beyond an end (the pipe lies elsewhere along it) twice as much against.
 int ends_shown(const Verification& v) { return v.ends_pinned - 2 * v.ends_continued; }
 
+// Where the best's and a rival's renders differ, the pixels show `a` and hardly `b`: at least
+// kMinTellingPx for it and at most 1 / kTellingRatio of that for the other.
+bool pixels_show(int for_a, int for_b) { return for_a >= kMinTellingPx && kTellingRatio * for_b <= for_a; }
+
 // The same evidence with the best and its rival in each other's place.
 Evidence rival_first(Evidence e) {
   std::swap(e.best, e.second);
@@ -152,12 +156,17 @@ Decision decide(const Evidence& given, const LocateConfig& cfg) {
   // Beyond the paper: of two poses the image confirms about as well (a near twin), the one whose
   // ends it shows where they are is the pipe: a best by a hair whose end is not seen, or beyond
   // which the tube goes on, gives way to a rival the image pins; the checks below judge the
-  // rival. Not for a pipe that slides along itself: in a pile, a slid coil's end that stops short
-  // of a pipe in front reads as pinned (17-coil: 10 wrong picks while clearing 3 bins).
+  // rival. So does a best whose ends the image shows no better where, of the pixels telling the
+  // two apart, it shows the rival and hardly the best (a Z's twin with its legs swapped, one end
+  // out of the view: 12-Z). Not for a pipe that slides along itself: in a pile, a slid coil's end
+  // that stops short of a pipe in front reads as pinned (17-coil: 10 wrong picks while clearing
+  // 3 bins).
+  const bool pixels_take_rival = cfg.tell_rivals_apart && pixels_show(given.told.for_b, given.told.for_a) &&
+                                 ends_shown(given.second) >= ends_shown(given.best);
   out.rival_taken = given.reached == CandidateStage::hypotheses && given.ends_judged &&
                     !given.ends_must_pin && given.have_best && given.have_second &&
                     as_good(given.second, given.best, cfg) &&
-                    ends_shown(given.second) > ends_shown(given.best);
+                    (ends_shown(given.second) > ends_shown(given.best) || pixels_take_rival);
   const Evidence e = out.rival_taken ? rival_first(given) : given;
   for (const Check& check : kChecks) {
     if (int(check.after) > int(e.reached)) break;
@@ -176,8 +185,8 @@ Decision decide(const Evidence& given, const LocateConfig& cfg) {
   // whose telling end is in view: beyond one of its ends the tube goes on, or it is not pinned).
   // ... or where the two differ, the image speaks for the best and hardly for the rival (not for
   // a pipe that slides along itself: its ends place it, below).
-  const bool told_apart = cfg.tell_rivals_apart && !e.ends_must_pin && e.told.for_a >= kMinTellingPx &&
-                          kTellingRatio * e.told.for_b <= e.told.for_a;
+  const bool told_apart =
+      cfg.tell_rivals_apart && !e.ends_must_pin && pixels_show(e.told.for_a, e.told.for_b);
   // A rival's end that goes on counts against it only where the pixels telling the two apart do
   // not speak for it half as much as for the best: another pipe touching the right pose's end
   // reads as its tube going on.
