@@ -92,13 +92,13 @@ struct TubeOnFloor {
   Image<float> scratch{s.camera.intrinsics.width, s.camera.intrinsics.height, 0.0f};
   ProjectedMesh projected;
   TubeOnFloor() { projected.reserve(lm.verify_mesh); }
-  Verification at(double x_mm, double y_mm = 0, bool look_for_holes = false) {
+  Verification at(double x_mm, double y_mm = 0, bool look_for_holes = false, const PixelBox* view = nullptr) {
     Pose m2w = Pose::Identity();
     m2w.translation() = Eigen::Vector3d(x_mm, y_mm, kTubeMm / 2);
     const Pose m2c = *s.camera.world_to_cam * m2w;
     const Intrinsics& k = s.camera.intrinsics;
     return verify_pose(lm.verify_mesh, lm.verify_winding, m2c, s.depth, k, 7.0f, 0.25f * float(kTubeMm), 0,
-                       &scratch, &projected, look_for_holes ? hole_side_px(lm, k, m2c) : 0);
+                       &scratch, &projected, look_for_holes ? hole_side_px(lm, k, m2c) : 0, view);
   }
 };
 
@@ -113,6 +113,50 @@ TEST(BinAwareVerification, APoseReachingOutOfTheViewSaysHowMuch) {
   EXPECT_EQ(t.at(-75).outside_view, 0.0f);
   EXPECT_NEAR(t.at(edge_mm - 75).outside_view, 0.5, 0.1);
   EXPECT_EQ(t.at(edge_mm + 10).outside_view, 1.0f);  // nearer than the floor, the tube projects farther out
+}
+
+// An active sensor reads nothing in a band at the left of its image, where its projector (or its
+// second imager) does not see the floor: f b / z wide, b the baseline. read_view() finds it on the
+// simulator's frames of both sensors.
+TEST(BinAwareVerification, TheViewLeavesOutTheSensorsDeadBand) {
+  const PipeModel model = straight_tube();
+  for (const char* sensor : {"kinect", "stereo"}) {
+    SCOPED_TRACE(sensor);
+    std::mt19937 rng(3);
+    SceneParams p;
+    p.pile.pipes = 8;
+    p.sensor = sensor_model(sensor);
+    p.camera_height_min_mm = p.camera_height_max_mm = 800;
+    const SimulatedScene s = simulate_scene(model, p, rng);
+    const Intrinsics& k = s.camera.intrinsics;
+    std::vector<int> col_reads, row_reads;
+    const PixelBox view = read_view(s.depth_mm, &col_reads, &row_reads);
+    const double band_px = k.fx * p.sensor.baseline_mm / 800;
+    EXPECT_NEAR(view.x0, band_px, 0.2 * band_px);
+    EXPECT_GT(view.x1, k.width / 2);  // (beyond the simulated bin nothing is drawn, nothing read)
+    EXPECT_EQ(view.y0, 0);
+    EXPECT_GT(view.y1, k.height / 2);
+  }
+}
+
+// A pose half in such a band: judged on the whole image, the half without readings counts as
+// not confirmed (agreement about 0.5, and the pipe would be refused); judged in the view, that
+// half is out of the view, as beyond the image's edge, and what is in view agrees.
+TEST(BinAwareVerification, APoseInTheDeadBandIsOutOfTheViewNotDisagreeing) {
+  TubeOnFloor t;
+  const Intrinsics& k = t.s.camera.intrinsics;
+  const int band = int(k.cx);  // the tube from x = -75 to 75 mm lies half left of the centre column
+  for (int y = 0; y < k.height; ++y)
+    for (int x = 0; x < band; ++x) t.s.depth.at(x, y) = 0;
+  std::vector<int> col_reads, row_reads;
+  const PixelBox view = read_view(t.s.depth, &col_reads, &row_reads);
+  EXPECT_EQ(view.x0, band);
+  const Verification whole = t.at(-75);
+  EXPECT_LT(whole.agreement(), 0.6);
+  EXPECT_EQ(whole.outside_view, 0.0f);
+  const Verification in_view = t.at(-75, 0, false, &view);
+  EXPECT_GT(in_view.agreement(), 0.9);
+  EXPECT_NEAR(in_view.outside_view, 0.5, 0.1);
 }
 
 // A pose slid 0.3 D past its pipe's end sees the floor through fewer of its pixels than the

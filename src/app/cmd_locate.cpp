@@ -142,6 +142,8 @@ void add_locate(CLI::App& app) {
     if (locator.config().remove_speckles)
       spdlog::info("speckles left out: {} readings beyond every reading within {} px by more than {:.1f} mm",
                    out.speckles, kSpeckleReachPx, locator.config().continuity_step_max_mm);
+    spdlog::info("the sensor's view: columns {}-{}, rows {}-{} (beyond, it reads nothing: out of the view)",
+                 out.view.x0, out.view.x1, out.view.y0, out.view.y1);
     spdlog::info(
         "thresholds in effect: continuity step {:.1f} mm, verify tolerance {:.1f} mm, refine inliers "
         "{:.1f} mm, normal window {:.1f} mm, hole fill {:.1f} mm",

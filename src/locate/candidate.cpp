@@ -54,8 +54,8 @@ constexpr double kEdgeMarginPx = 3;
 bool reaches_image_edge(const CandidateContext& ctx, const Eigen::Vector3f* pts, int n) {
   for (int k = 0; k < n; ++k) {
     const Eigen::Vector2d uv = ctx.camera.project(ctx.bin_to_cam * pts[k].cast<double>());
-    if (uv.x() < kEdgeMarginPx || uv.y() < kEdgeMarginPx || uv.x() > ctx.camera.width - 1 - kEdgeMarginPx ||
-        uv.y() > ctx.camera.height - 1 - kEdgeMarginPx)
+    if (uv.x() < ctx.view.x0 + kEdgeMarginPx || uv.y() < ctx.view.y0 + kEdgeMarginPx ||
+        uv.x() > ctx.view.x1 - kEdgeMarginPx || uv.y() > ctx.view.y1 - kEdgeMarginPx)
       return true;
   }
   return false;
@@ -403,7 +403,7 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
     return verify_pose(lm.verify_mesh, lm.verify_winding, model_to_cam, ctx.depth, ctx.camera,
                        float(cfg.verify_tolerance_mm), float(cfg.side_drop_of_d) * lm.tube_d_mm,
                        free_space_band_px(cfg, lm, ctx.camera, model_to_cam), &buf->scratch_depth,
-                       &buf->scratch_mesh, hole_side_px(lm, ctx.camera, model_to_cam));
+                       &buf->scratch_mesh, hole_side_px(lm, ctx.camera, model_to_cam), &ctx.view);
   };
   // Two readings of one pipe: more than ambiguity_pose_mm apart, and sharing at least
   // kRivalMinSharedTube of the tube. A hypothesis that shares less lies on another pipe (a ridge

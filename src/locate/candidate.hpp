@@ -175,6 +175,7 @@ struct CandidateContext {
   const Intrinsics& camera;
   Pose bin_to_cam;
   float lowest_surface_z_mm = NAN;  // bin frame: the floor where it is seen (LocateOutput)
+  PixelBox view;                    // the pixels the sensor reads (read_view; LocateOutput)
 };
 
 struct CandidateTimes {

@@ -22,6 +22,8 @@ Locator::Locator(const PipeModel& model, const LocateConfig& cfg, const Intrinsi
   holes_.reserve(zb_);
   constexpr int kHeightBinsMm = 8192;  // heights over 8 m in one frame are not a bin
   height_histogram_.assign(std::size_t(kHeightBinsMm), 0);
+  col_reads_.assign(std::size_t(camera.width), 0);
+  row_reads_.assign(std::size_t(camera.height), 0);
   band_holes_.assign(std::size_t(pool_.size()), 0);
   reserve_regions(&rb_, zb_, cfg, lm_.tube_d_mm, lm_.extent_l_mm);
 
@@ -76,6 +78,7 @@ const LocateOutput& Locator::locate(const Image<float>& frame_depth, const Camer
   // of a seen floor a little deeper, which errs on the side of keeping a pose).
   constexpr float kLowestSurfaceShare = 0.02f;
   out_.lowest_surface_z_mm = lowest_surface_z(zb_, kLowestSurfaceShare, &height_histogram_);
+  out_.view = read_view(depth, &col_reads_, &row_reads_);
   out_.times.zbuffer_ms = ms_since(t);
 
   t = Clock::now();
@@ -245,8 +248,16 @@ void Locator::merge_estimate(int c) {
 }
 
 void Locator::work_candidate(int c, Worker& wk, const Frame& f) {
-  const CandidateContext ctx{model_, lm_,           starts_,    cfg_, zb_, *f.depth, f.camera->intrinsics,
-                             f.bin_to_cam, out_.lowest_surface_z_mm};
+  const CandidateContext ctx{model_,
+                             lm_,
+                             starts_,
+                             cfg_,
+                             zb_,
+                             *f.depth,
+                             f.camera->intrinsics,
+                             f.bin_to_cam,
+                             out_.lowest_surface_z_mm,
+                             out_.view};
   CandidateInput in;
   in.index = c;
   in.region = &rb_.candidates[std::size_t(c)];

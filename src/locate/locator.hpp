@@ -29,6 +29,7 @@ struct LocateOutput {
   int speckles = 0;  // readings left out as speckles (remove_speckles)
   DepthNoise noise;  // measured in the frame when a threshold derives from it (else samples = 0)
   float lowest_surface_z_mm = 0;  // bin frame: the floor where it is seen (no pose lies below it)
+  PixelBox view;  // the pixels the sensor reads: the image less its edges' dead bands (read_view)
   bool budget_exhausted = false;
   int pick() const {
     for (std::size_t i = 0; i < estimates.size(); ++i)
@@ -98,6 +99,7 @@ class Locator {
   NoiseHistograms noise_histograms_;
   Image<float> depth_kept_;            // the frame less its speckles (remove_speckles)
   std::vector<int> height_histogram_;  // 1 mm bins, for the lowest surface
+  std::vector<int> col_reads_, row_reads_;  // readings per column and row, for the view
   LocatorModel lm_;
   StartSet starts_;
   ZBuffer zb_;

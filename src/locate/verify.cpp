@@ -22,17 +22,38 @@ float drawn_mm(const Image<float>& render, const PixelBox& box, int x, int y) {
 
 }  // namespace
 
+PixelBox read_view(const Image<float>& depth, std::vector<int>* col_reads, std::vector<int>* row_reads) {
+  col_reads->assign(std::size_t(depth.width), 0);
+  row_reads->assign(std::size_t(depth.height), 0);
+  for (int y = 0; y < depth.height; ++y)
+    for (int x = 0; x < depth.width; ++x) {
+      const bool read = depth.at(x, y) > 0;
+      (*col_reads)[std::size_t(x)] += read, (*row_reads)[std::size_t(y)] += read;
+    }
+  const auto read_enough = [](int reads, int of) { return float(reads) >= kMinReadShare * float(of); };
+  PixelBox view{0, 0, depth.width - 1, depth.height - 1};
+  while (view.x0 <= view.x1 && !read_enough((*col_reads)[std::size_t(view.x0)], depth.height)) ++view.x0;
+  while (view.x1 >= view.x0 && !read_enough((*col_reads)[std::size_t(view.x1)], depth.height)) --view.x1;
+  while (view.y0 <= view.y1 && !read_enough((*row_reads)[std::size_t(view.y0)], depth.width)) ++view.y0;
+  while (view.y1 >= view.y0 && !read_enough((*row_reads)[std::size_t(view.y1)], depth.width)) --view.y1;
+  return view;
+}
+
 Verification verify_pose(const Mesh& mesh, Winding winding, const Pose& model_to_cam,
                          const Image<float>& depth, const Intrinsics& k, float tol, float side_drop_mm,
-                         int free_band_px, Image<float>* scratch, ProjectedMesh* projected,
-                         int hole_side_px) {
+                         int free_band_px, Image<float>* scratch, ProjectedMesh* projected, int hole_side_px,
+                         const PixelBox* view) {
   Verification v;
   v.box = render_depth_in_box(mesh, model_to_cam, k, scratch, projected, winding);
   const PixelBox& box = v.box;
+  const PixelBox seen = view ? *view : PixelBox{0, 0, k.width - 1, k.height - 1};
+  const auto in_view = [&](double x, double y) {
+    return x >= seen.x0 && y >= seen.y0 && x < seen.x1 + 1 && y < seen.y1 + 1;
+  };
   int outside = 0;
   for (std::size_t i = 0; i < mesh.vertices.size() && projected->cam.size() >= mesh.vertices.size(); ++i) {
     const Eigen::Vector2d& px = projected->px[i];
-    outside += !(projected->cam[i].z() > 0 && px.x() >= 0 && px.y() >= 0 && px.x() < k.width && px.y() < k.height);
+    outside += !(projected->cam[i].z() > 0 && in_view(px.x(), px.y()));
   }
   v.outside_view = mesh.vertices.empty() ? 0.f : float(outside) / float(mesh.vertices.size());
   const auto model_at = [&](int x, int y) { return drawn_mm(*scratch, box, x, y) > 0; };
@@ -56,7 +77,7 @@ Verification verify_pose(const Mesh& mesh, Winding winding, const Pose& model_to
   for (int y = box.y0; y <= box.y1; ++y)
     for (int x = box.x0; x <= box.x1; ++x) {
       const float zm = scratch->at(x, y);
-      if (zm <= 0) continue;
+      if (zm <= 0 || !in_view(x, y)) continue;
       // The silhouette's rim is left out: lateral noise mixes it with the background. Beyond it
       // the sides are read (the rim is rare: the interior takes the short test).
       if (x == box.x0 || y == box.y0 || x == box.x1 || y == box.y1 || scratch->at(x - 1, y) <= 0 ||

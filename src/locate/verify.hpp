@@ -53,15 +53,26 @@ struct Verification {
 constexpr float kMaxShareBelowFloor = 0.3f, kBelowFloorOfD = 0.25f;
 constexpr int kMinSidePx = 20;
 
+// Beyond the paper: the pixels the sensor reads. An active sensor reads nothing in a band at an
+// edge of its image where its projector (structured light) or its second imager (stereo) does not
+// see: a RealSense D4xx's left band is f b / z wide, 38-68 px of 640 on the zoo's frames. The view
+// is the image less such bands: the columns and rows at its edges with readings in fewer than
+// kMinReadShare of their pixels. A pose's part there is out of the view, as beyond the image's
+// edge, not disagreeing. col_reads and row_reads: working memory (resized to the image).
+constexpr float kMinReadShare = 0.05f;
+PixelBox read_view(const Image<float>& depth_mm, std::vector<int>* col_reads, std::vector<int>* row_reads);
+
 // scratch: camera-sized image whose contents are overwritten in the model's box; projected:
 // reserved for the mesh. winding: of the mesh, if closed (its back faces are then not drawn).
 // side_drop_mm: how far beyond its silhouette a pipe's surroundings lie at least (a share of D).
 // free_band_px: the pixels this close inside the rim are left out of inner_free_space().
 // hole_side_px: the side of a square seen through that sets seen_through_patch (0: not looked for).
+// view: the pixels the sensor reads (read_view); null: the whole image. The model's pixels outside
+// it are not judged, and its vertices there count as outside the view.
 Verification verify_pose(const Mesh& mesh, Winding winding, const Pose& model_to_cam,
                          const Image<float>& depth_mm, const Intrinsics& k, float tolerance_mm,
                          float side_drop_mm, int free_band_px, Image<float>* scratch,
-                         ProjectedMesh* projected, int hole_side_px = 0);
+                         ProjectedMesh* projected, int hole_side_px = 0, const PixelBox* view = nullptr);
 
 // Beyond the paper: are the tube's ends where the image shows them? Beyond each end of the
 // centreline (model frame, ordered from one end to the other; tube diameter d_mm), the surface a

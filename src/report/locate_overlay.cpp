@@ -12,7 +12,8 @@ namespace pipeloc {
 namespace {
 
 const Rgb kRegion{170, 90, 220}, kCore{40, 110, 255}, kAxis{255, 150, 0}, kRidge{40, 230, 60},
-    kOutline{255, 235, 60}, kOther{150, 150, 150}, kPick{255, 30, 30}, kFloor{0, 150, 140};
+    kOutline{255, 235, 60}, kOther{150, 150, 150}, kPick{255, 30, 30}, kFloor{0, 150, 140},
+    kViewEdge{0, 200, 255};
 
 // A core at floor height that gave no pose is the bin floor seen between pipes, not a pipe: it is
 // drawn faintly in its own colour, without region, direction or ridge. Floor height: within D/2
@@ -51,7 +52,8 @@ void draw_legend(Image<Rgb>* img) {
                            {kRegion, "CANDIDATE REGION (GROWN)"},
                            {kAxis, "PRINCIPAL DIRECTION"},
                            {kRidge, "Z-RIDGE POINTS"},
-                           {kFloor, "FLOOR SEEN BETWEEN PIPES (NO CANDIDATE)"}};
+                           {kFloor, "FLOOR SEEN BETWEEN PIPES (NO CANDIDATE)"},
+                           {kViewEdge, "EDGE OF THE VIEW (NO DEPTH READ BEYOND)"}};
   const int scale = 1, line = 9, x0 = 4, y0 = 4;
   const int w = 8 + 4 * scale * 42, h = line * int(std::size(entries)) + 4;
   for (int y = y0; y < y0 + h; ++y)
@@ -65,6 +67,24 @@ void draw_legend(Image<Rgb>* img) {
     draw_text(img, x0 + 15, y, e.text, {235, 235, 235}, scale);
     y += line;
   }
+}
+
+// The edges of the sensor's view (read_view) that lie inside the image, dashed: beyond them it
+// reads nothing, and a pose's part there counts as out of the view.
+void draw_view_edges(Image<Rgb>* img, const PixelBox& view) {
+  constexpr int kDash = 6;
+  const auto dashed = [&](int x0, int y0, int x1, int y1) {  // a horizontal or vertical line
+    const int dx = x1 > x0, dy = y1 > y0, n = std::max(x1 - x0, y1 - y0);
+    for (int i = 0; i <= n; i += 2 * kDash) {
+      const int j = std::min(n, i + kDash);
+      draw_line(img, x0 + dx * i, y0 + dy * i, x0 + dx * j, y0 + dy * j, kViewEdge, 1);
+    }
+  };
+  if (view.empty()) return;
+  if (view.x0 > 0) dashed(view.x0, view.y0, view.x0, view.y1);
+  if (view.x1 < img->width - 1) dashed(view.x1, view.y0, view.x1, view.y1);
+  if (view.y0 > 0) dashed(view.x0, view.y0, view.x1, view.y0);
+  if (view.y1 < img->height - 1) dashed(view.x0, view.y1, view.x1, view.y1);
 }
 
 }  // namespace
@@ -161,6 +181,7 @@ Image<Rgb> draw_locate_overlay(const Locator& loc, const Image<float>& depth, co
                : e.pickable ? kOutline
                             : kOther);
   }
+  draw_view_edges(&img, out.view);
   draw_legend(&img);
   return img;
 }
