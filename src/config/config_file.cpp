@@ -224,6 +224,7 @@ void read_locate(Section& s, LocateConfig* c) {
   s.integer("icp_probe_iterations", &c->icp_probe_iterations, 1, 500, "iterations");
   s.real("icp_probe_cell_mm", &c->icp_probe_cell_mm, 0.5, 20, "mm");
   s.integer("icp_continued_states", &c->icp_continued_states, 1, 48, "states");
+  s.integer("icp_continued_states_sliding", &c->icp_continued_states_sliding, 1, 48, "states");
   s.integer("icp_fine_iterations", &c->icp_fine_iterations, 1, 500, "iterations");
   s.real("icp_converged_mm", &c->icp_converged_mm, 0.001, 10, "mm");
   s.real("residual_max_of_d", &c->residual_max_of_d, 0.01, 5, "x D");

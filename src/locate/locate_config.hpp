@@ -88,7 +88,10 @@ struct LocateConfig {
                                    // (72 = all of 2 x 6 turns x 6 yaws; fewer trade recall for time),
   int icp_probe_iterations = 3;    // each gets this many iterations ...
   double icp_probe_cell_mm = 4.0;  // ... on ridges of this cell size (coarse: a quarter of the work)
-  int icp_continued_states = 4;    // ... and the best this many run to convergence,
+  int icp_continued_states = 8;    // ... and the best this many run to convergence,
+  int icp_continued_states_sliding = 4;  // ... this many for a pipe that slides along itself (its
+                                         // further states are the pipe slid, which the image does
+                                         // not tell apart)
   int icp_fine_iterations = 8;     // the last this many on ridge_cell_mm, the others on the probe cells
   double icp_converged_mm = 0.05;
   double residual_max_of_d = 0.35;  // R_th = this * D (mean ridge distance; verification follows)
@@ -159,7 +162,7 @@ inline void use_paper_search(LocateConfig* c) {
   c->initial_yaw_step_deg = 180;
   c->slide_starts = false;
   c->icp_probed_states = 2 * c->initial_rotations;
-  c->icp_continued_states = 2 * c->initial_rotations;
+  c->icp_continued_states = c->icp_continued_states_sliding = 2 * c->initial_rotations;
   c->judge_slides = false;
   c->judge_rolls = false;
   c->residual_rescue_of_rth = 1;
