@@ -200,6 +200,14 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
       // The tube going on beyond both ends: the pipe there is longer than the pose.
       {"ends read, the tube going on beyond both", ends_read(judged(seen(900, 0, 0)), 0, 2, 0, 0), true,
        CandidateOutcome::accepted, false, false, 0.9f},
+      // A pipe that does not slide, wholly in the view, its ends read and neither shown ending:
+      // the image does not place it (a pipe model over a hose or a box's edge). Reaching out of
+      // the view, an end may lie beyond it; sliding pipes have their own rule (below).
+      {"ends read, none pinned, wholly in view", ends_read(judged(seen(900, 0, 0)), 0, 0, 0, 0), true,
+       CandidateOutcome::accepted, false, false, 0.9f},
+      {"ends read, none pinned, a twentieth out of the view",
+       ends_read(judged(outside_view(seen(950, 0, 0), 0.05f)), 0, 0, 0, 0), true, CandidateOutcome::accepted,
+       false, true, 0.9025f},
       {"ends read, going on beyond one", ends_read(judged(seen(900, 0, 0)), 1, 1, 0, 0), true,
        CandidateOutcome::accepted, false, true, 0.9f},
       {"a tenth under a pipe, a tenth out of the view", judged(outside_view(seen(900, 0, 100), 0.1f)), true,
