@@ -205,6 +205,13 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
       // the view, an end may lie beyond it; sliding pipes have their own rule (below).
       {"ends read, none pinned, wholly in view", ends_read(judged(seen(900, 0, 0)), 0, 0, 0, 0), true,
        CandidateOutcome::accepted, false, false, 0.9f},
+      {"the same, a model without a centreline (its ends never read)",
+       [] {
+         Evidence e = ends_read(judged(seen(900, 0, 0)), 0, 0, 0, 0);
+         e.has_ends = false;
+         return e;
+       }(),
+       true, CandidateOutcome::accepted, false, true, 0.9f},
       {"ends read, none pinned, a twentieth out of the view",
        ends_read(judged(outside_view(seen(950, 0, 0), 0.05f)), 0, 0, 0, 0), true, CandidateOutcome::accepted,
        false, true, 0.9025f},

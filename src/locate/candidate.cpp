@@ -238,10 +238,11 @@ Decision decide(const Evidence& given, const LocateConfig& cfg) {
   const bool ends_go_on = e.ends_judged && e.best.ends_continued >= 2;
   // ... and a pipe that does not slide along itself, wholly in the view, is placed by the image
   // only where it shows one of its ends ending there: of the picks on real frames without pipes,
-  // 14 of 30 showed neither end (a pipe model laid over a hose, a handle, a box's edge), of the
-  // zoo's right picks of such pipes in view none (docs/experiments.md).
+  // 14 of 30 showed neither end (a pipe model laid over a hose, a handle, a box's edge); on the
+  // zoo no image loses its pick (docs/experiments.md). Not for a model without a centreline (a
+  // hollow STL whose bore hides it): its ends are never read.
   const bool unplaced_in_view =
-      e.ends_judged && !e.model_slides && !(e.best.outside_view > 0) && e.best.ends_pinned == 0;
+      e.ends_judged && e.has_ends && !e.model_slides && !(e.best.outside_view > 0) && e.best.ends_pinned == 0;
   out.pickable = !out.ambiguous && e.best.occluded() <= float(cfg.verify_max_occluded) && checked_in_view &&
                  !ends_go_on && !unplaced_in_view;
   return out;
@@ -603,6 +604,7 @@ bool work_candidate(const CandidateContext& ctx, const CandidateInput& in, const
   evidence.ends_must_pin = ctx.cfg.pin_slides_by_ends && evidence.model_slides;
   evidence.short_region = in.region->short_region;
   evidence.ends_judged = ctx.cfg.pin_slides_by_ends;
+  evidence.has_ends = ctx.lm.centreline_points.size() >= 2;
   // Between two stages: decided by the evidence so far, or out of time. A candidate cut short
   // leaves no estimate (its outcome stays "budget").
   const auto settled = [&] {

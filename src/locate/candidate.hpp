@@ -91,6 +91,7 @@ struct Evidence {
   bool model_slides = false;                      // the model slides along itself (LocatorModel::slides)
   bool ends_must_pin = false;                     // ... and its ends place it (pin_slides_by_ends)
   bool ends_judged = false;                       // the poses' ends were read (pin_slides_by_ends)
+  bool has_ends = true;                           // ... the model has a centreline to read them by
   bool short_region = false;                      // the region was shorter than a * L
   int ridge_points = 0;                           // observed_ridge: observed Z-ridge points
   float least_ridge_cost_mm = 1e30f;              // ridge_fits: least residual of the states continued
