@@ -49,9 +49,10 @@ int explained_points(const CandidateContext& ctx, const Image<float>& rendered, 
   return n;
 }
 
-// Whether any of the points (bin frame) is seen within kEdgeMarginPx of the image's border.
+// Whether any of the points (bin frame) is seen within kEdgeMarginPx of the view's border (the
+// image less the sensor's dead bands: read_view).
 constexpr double kEdgeMarginPx = 3;
-bool reaches_image_edge(const CandidateContext& ctx, const Eigen::Vector3f* pts, int n) {
+bool reaches_view_edge(const CandidateContext& ctx, const Eigen::Vector3f* pts, int n) {
   for (int k = 0; k < n; ++k) {
     const Eigen::Vector2d uv = ctx.camera.project(ctx.bin_to_cam * pts[k].cast<double>());
     if (uv.x() < ctx.view.x0 + kEdgeMarginPx || uv.y() < ctx.view.y0 + kEdgeMarginPx ||
@@ -317,10 +318,10 @@ RidgeFits fit_ridges(const CandidateContext& ctx, const CandidateInput& in, cons
   const RidgeView fine_ridge{in.ridge, observed.count, axis.axis, float(cfg.ridge_cell_mm)};
   buf->slide.observed_top.build(buf->coarse_ridge.data(), n_coarse, probe_cell, d);
   buf->starts.clear();
-  // Beyond the paper: where the observed ridge reaches the image's edge, the pipe may lie anywhere
+  // Beyond the paper: where the observed ridge reaches the view's edge, the pipe may lie anywhere
   // along it beyond the edge: the starts slide along edge_slide_along_of_l * L instead.
   const float along_mm = cfg.slide_starts && cfg.edge_slide_along_of_l > 0 &&
-                                 reaches_image_edge(ctx, buf->coarse_ridge.data(), n_coarse)
+                                 reaches_view_edge(ctx, buf->coarse_ridge.data(), n_coarse)
                              ? float(cfg.edge_slide_along_of_l) * lm.extent_l_mm
                              : lm.slide_along_mm;
   for (int s = 0; s < starts.size(); ++s)

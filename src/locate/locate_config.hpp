@@ -81,7 +81,7 @@ struct LocateConfig {
       1.0;  // initial states slid in steps of this * D across the axis, twice along
   bool slide_starts = true;  // beyond the paper: each start slid to where its ridge covers the observed one
                              // (along the axis up to L/4 either way ...
-  double edge_slide_along_of_l = 0.5;  // ... up to this * L where the observed ridge reaches the image's
+  double edge_slide_along_of_l = 0.5;  // ... up to this * L where the observed ridge reaches the view's
                                        // edge: the pipe may lie anywhere along it beyond; 0: L/4 there too)
   int icp_max_iterations = 24;
   int icp_probed_states = 48;      // of the slid starts, the best this many (by ridge cover) are probed

@@ -60,7 +60,7 @@ void reserve_slide(SlideBuffers* buf, const LocatorModel& lm, int max_ridge_poin
 // ridge best covers the observed one (mean top-view distance both ways, truncated at D).
 // buf->observed_top must hold the observed ridge (TopDistance::build with cap D), and
 // observed_in_axis the observed ridge points in the axis frame. along_mm: how far along the axis
-// either way (the model's slide_along_mm, L/4, but where the observed ridge reaches the image's edge).
+// either way (the model's slide_along_mm, L/4, but where the observed ridge reaches the view's edge).
 SlidStart slide_start(const LocatorModel& lm, const StartSet& starts, int s, const Pose& axis_to_bin,
                       const Eigen::Vector3f* observed_in_axis, int n_observed, const LocateConfig& cfg,
                       SlideBuffers* buf, float along_mm);
