@@ -46,6 +46,12 @@ Evidence sliding(Evidence e, int pinned, int continued) {
   return e;
 }
 
+// Of the best's pinned ends, `n` seen ending outright (the tip shown, every probe beyond read).
+Evidence seen_ending(Evidence e, int n) {
+  e.best.ends_seen_ending = n;
+  return e;
+}
+
 // Ends read for the best and its rival (a model with a near twin): pinned and continued each.
 Evidence ends_read(Evidence e, int best_pinned, int best_continued, int second_pinned, int second_continued) {
   e.ends_judged = true;
@@ -302,6 +308,14 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
       // end stopping short of a pipe in front reads as pinned): ambiguous.
       {"sliding, a slid rival as good pinned",
        sliding(ends_read(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), 0, 0, 1, 0), 0, 0), true,
+       CandidateOutcome::accepted, true, false, 0.45f},
+      // A sliding pipe's end pinned tells it from a slid rival as good only where the image shows it
+      // ending outright; a pin read past a hidden tip or on one probe does not.
+      {"sliding, an end seen ending, a slid rival as good with none seen",
+       seen_ending(sliding(ends_read(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), 1, 0, 0, 0), 1, 0), 1),
+       true, CandidateOutcome::accepted, false, true, 0.9f},
+      {"sliding, an end pinned past a hidden tip, a slid rival as good",
+       sliding(ends_read(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), 1, 0, 0, 0), 1, 0), true,
        CandidateOutcome::accepted, true, false, 0.45f},
       {"rival seen through: worse", judged_with_rival(seen(900, 0, 0), seen(900, 30, 0)), true,
        CandidateOutcome::accepted, false, true, 0.9f},

@@ -372,16 +372,20 @@ TEST(BinAwareVerification, AnEndHiddenUnderAPipeAcrossIsNotShownEnding) {
       }
     return depth;
   };
-  const auto pinned = [&](const Image<float>& depth, bool tip_must_show) {
+  const auto ends = [&](const Image<float>& depth, bool tip_must_show) {
     Verification v;
     judge_ends(lm.centreline_points, d, pipe, depth, k, tol, &v, tip_must_show);
-    return v.ends_pinned;
+    return v;
   };
   const Image<float> open = with_cover(false), covered = with_cover(true);
-  EXPECT_EQ(pinned(open, false), 2);
-  EXPECT_EQ(pinned(open, true), 2);      // both tips seen: both ends shown
-  EXPECT_EQ(pinned(covered, false), 2);  // the floor beyond the hidden end
-  EXPECT_EQ(pinned(covered, true), 1);
+  EXPECT_EQ(ends(open, false).ends_pinned, 2);
+  EXPECT_EQ(ends(open, true).ends_pinned, 2);      // both tips seen: both ends shown
+  EXPECT_EQ(ends(covered, false).ends_pinned, 2);  // the floor beyond the hidden end
+  EXPECT_EQ(ends(covered, true).ends_pinned, 1);
+  // Seen ending outright (what tells a sliding pipe from its slid rival): only where the tip shows.
+  EXPECT_EQ(ends(open, false).ends_seen_ending, 2);
+  EXPECT_EQ(ends(covered, false).ends_seen_ending, 1);
+  EXPECT_EQ(ends(covered, true).ends_seen_ending, 1);
 }
 
 TEST(BinAwareVerification, NoPoseBelowTheFloor) {

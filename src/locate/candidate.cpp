@@ -194,8 +194,13 @@ Decision decide(const Evidence& given, const LocateConfig& cfg) {
   const bool pixels_for_rival =
       cfg.tell_rivals_apart && 2 * e.told.for_b >= kMinTellingPx && 2 * e.told.for_b > e.told.for_a;
   const int rival_ends_shown = pixels_for_rival ? e.second.ends_pinned : ends_shown(e.second);
+  // A pipe that slides along itself is told from its slid rival only by an end seen ending
+  // outright: a pin read past a hidden tip or on one probe is where a slid coil's end meets a
+  // pipe in front or the image's edge (17-coil, 12 bins, room for 32 candidates: 11 wrong picks).
+  const int best_ends_shown =
+      e.ends_must_pin ? e.best.ends_seen_ending - 2 * e.best.ends_continued : ends_shown(e.best);
   out.ambiguous = e.have_second && as_good(e.second, e.best, cfg) &&
-                  !(e.ends_judged && ends_shown(e.best) > rival_ends_shown) && !told_apart;
+                  !(e.ends_judged && best_ends_shown > rival_ends_shown) && !told_apart;
   // Beyond the paper: a pipe that slides along itself is placed along its length only by an end
   // the image shows; where none is seen, or the tube goes on beyond one, the pose may be slid.
   if (e.ends_must_pin && (e.best.ends_pinned == 0 || e.best.ends_continued > 0)) out.ambiguous = true;

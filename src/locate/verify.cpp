@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 
 namespace pipeloc {
 namespace {
@@ -128,7 +129,7 @@ Verification verify_pose(const Mesh& mesh, Winding winding, const Pose& model_to
 void judge_ends(const std::vector<Eigen::Vector3f>& centreline, float d, const Pose& model_to_cam,
                 const Image<float>& depth, const Intrinsics& k, float tol, Verification* v,
                 bool tip_must_show) {
-  v->ends_pinned = v->ends_continued = 0;
+  v->ends_pinned = v->ends_continued = v->ends_seen_ending = 0;
   const int n = int(centreline.size());
   if (n < 2) return;
   const Eigen::Matrix3f r = model_to_cam.linear().cast<float>();
@@ -169,7 +170,9 @@ void judge_ends(const std::vector<Eigen::Vector3f>& centreline, float d, const P
       const float zo = probe(-inside, &facing_z);
       tip_hidden = tip_hidden || (zo > 0 && zo < facing_z - tol);
     }
-    v->ends_pinned += free == probes && !(tip_must_show && tip_hidden);
+    const bool pinned = free == probes && !(tip_must_show && tip_hidden);
+    v->ends_pinned += pinned;
+    v->ends_seen_ending += pinned && !tip_hidden && probes == int(std::size(kEndProbesOfD));
     v->ends_continued += going_on == probes;
   }
 }

@@ -45,6 +45,9 @@ struct Verification {
   // beyond lies lower), continued where the tube's surface goes on beyond it (a pose slid along
   // the pipe); neither where nothing is seen there (out of view, no reading, something in front).
   int ends_pinned = 0, ends_continued = 0;
+  // ... of the pinned ends, those seen ending outright: the tip shown and every probe beyond it
+  // read, lower (with tip_must_show every pinned end whose probes all read).
+  int ends_seen_ending = 0;
 };
 
 // A pose is under the floor when more than this share of its model lies more than this * D below
@@ -78,8 +81,8 @@ Verification verify_pose(const Mesh& mesh, Winding winding, const Pose& model_to
 // centreline (model frame, ordered from one end to the other; tube diameter d_mm), the surface a
 // continued tube would show the camera is compared with the depth measured there: farther than
 // tolerance_mm is an end the image pins, within it a tube going on. Fills ends_pinned and
-// ends_continued of *v. With tip_must_show, an end is pinned only where nothing lies in front of
-// the tube at its tip and half a diameter inside it: an end hidden under another pipe is not
+// ends_continued (and ends_seen_ending) of *v. With tip_must_show, an end is pinned only where nothing lies
+// in front of the tube at its tip and half a diameter inside it: an end hidden under another pipe is not
 // shown ending there, whatever lies beyond.
 void judge_ends(const std::vector<Eigen::Vector3f>& centreline, float d_mm, const Pose& model_to_cam,
                 const Image<float>& depth_mm, const Intrinsics& k, float tolerance_mm, Verification* v,
