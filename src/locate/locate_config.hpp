@@ -145,7 +145,7 @@ struct LocateConfig {
   bool match_surface = false;
 
   // Choice of the pick and fixed sizes.
-  int max_candidates = 24;
+  int max_candidates = 32;
   // Of them at most this many shorter than a * L: each costs as much time as a long one.
   int max_short_candidates = 4;
   int max_results = 0;  // poses reported per image; 0: every pose found (at most max_candidates)
