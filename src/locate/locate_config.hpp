@@ -147,7 +147,7 @@ struct LocateConfig {
   // Choice of the pick and fixed sizes.
   int max_candidates = 32;
   // Of them at most this many shorter than a * L: each costs as much time as a long one.
-  int max_short_candidates = 4;
+  int max_short_candidates = 8;
   int max_results = 0;  // poses reported per image; 0: every pose found (at most max_candidates)
   int threads = 2;
   int result_cap() const { return max_results > 0 ? max_results : max_candidates; }
