@@ -125,12 +125,12 @@ void add_locate(CLI::App& app) {
     }
     spdlog::info(
         "{} pipes found ({} candidate regions ({} of pieces joined across gaps, {} shorter than a * L "
-        "tried last, {} grown again to the equator after leaking), {} cores ({} split off touching "
-        "pipes, {} standing on the floor, {} too long kept whole), {} of them in a larger one's region "
-        "({} tried last), {} grown mostly into earlier regions; {} too short, {} not convex, {} leaked) "
-        "in {:.1f} ms; pick: {}",
+        "tried last, {} grown again to the equator after leaking, {} left over by a pose), {} cores "
+        "({} split off touching pipes, {} standing on the floor, {} too long kept whole), {} of them "
+        "in a larger one's region ({} tried last), {} grown mostly into earlier regions; {} too short, "
+        "{} not convex, {} leaked) in {:.1f} ms; pick: {}",
         out.estimates.size(), out.regions.candidates, out.regions.joined, out.regions.short_candidates,
-        out.regions.regrown_after_leak, out.regions.cores_kept, out.regions.split_cores,
+        out.regions.regrown_after_leak, out.regions.leftover, out.regions.cores_kept, out.regions.split_cores,
         out.regions.raised_cores, out.regions.whole_long_cores, out.regions.claimed,
         out.regions.retried_claimed, out.regions.overlapping, out.regions.short_regions,
         out.regions.not_convex, out.regions.leaked, out.times.total_ms,

@@ -210,6 +210,7 @@ void read_locate(Section& s, LocateConfig* c) {
   s.real("hole_bridge_of_d", &c->hole_bridge_of_d, 0, 10, "x D (0: off)");
   s.real("region_max_claimed_share", &c->region_max_claimed_share, 0, 1, "share");
   s.boolean("retry_claimed_cores", &c->retry_claimed_cores);
+  s.boolean("leftover_regions", &c->leftover_regions);
   s.real("section_width_min_of_d", &c->section_width_min_of_d, 0.1, 2, "x D");
   s.real("section_width_max_of_d", &c->section_width_max_of_d, 0.1, 3, "x D");
   s.real("scan_step_deg", &c->scan_step_deg, 0.5, 45, "deg");

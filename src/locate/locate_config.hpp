@@ -65,6 +65,9 @@ struct LocateConfig {
   bool retry_claimed_cores = true;  // a core lying in an earlier candidate's region is grown again
                                     // after all the others, while there is room (the region over it
                                     // may be a touching neighbour's; false: the paper's one region)
+  bool leftover_regions = true;     // what an accepted pose leaves of its region unexplained, when
+                                    // long enough, is tried as a candidate of its own (false: the
+                                    // paper's one pipe per region)
   double convexity_min_share =
       0.6;  // of the cells grown straight from a core, at least this share tilt away from it
 
@@ -167,6 +170,7 @@ inline void use_paper_search(LocateConfig* c) {
   c->judge_rolls = false;
   c->residual_rescue_of_rth = 1;
   c->short_region_min_extent_of_l = c->region_min_extent_of_l;
+  c->leftover_regions = false;
 }
 
 }  // namespace pipeloc

@@ -41,6 +41,7 @@ Locator::Locator(const PipeModel& model, const LocateConfig& cfg, const Intrinsi
   ridge_pts_.assign(std::size_t(ridge_capacity_) * cfg.max_candidates, Eigen::Vector3f::Zero());
   slot_.resize(std::size_t(cfg.max_candidates));
   slot_filled_.assign(std::size_t(cfg.max_candidates), 0);
+  explained_.assign(std::size_t(rb_.max_region_cells), 0);
   out_.estimates.reserve(std::size_t(cfg.max_candidates));
   out_.traces.reserve(std::size_t(cfg.max_candidates));
 }
@@ -107,6 +108,8 @@ const LocateOutput& Locator::locate(const Image<float>& frame_depth, const Camer
   handout.frame = &frame;
   handout.t_start = t_start;
   pool_.run(pool_.size(), [&](int task, int worker) { regions_and_candidates(handout, task, worker); });
+  first_leftover_ = int(rb_.candidates.size());
+  if (cfg_.leftover_regions) leftover_candidates(frame, first_leftover_);
   const int n = int(rb_.candidates.size());
   out_.traces.resize(std::size_t(n));
   constexpr double kAverageWeight = 0.2;
@@ -229,14 +232,44 @@ void Locator::candidate_task(const Frame& f, int c, int worker) {
   wk.candidate_ms_sum += ms_since(t0);
 }
 
+void Locator::leftover_candidates(const Frame& f, int n) {
+  // A cell is explained where it lies within the verification's tolerance of the pose's surface
+  // (the voxel index names the nearest surface sample within a voxel's half diagonal).
+  const float near_mm = float(cfg_.verify_tolerance_mm) + 0.5f * std::sqrt(3.0f) * LocatorModel::voxel_mm;
+  const int w = zb_.z.width;
+  const int first = n;
+  for (int c = 0; c < n; ++c) {
+    if (!slot_filled_[std::size_t(c)]) continue;
+    const CandidateRegion& region = rb_.candidates[std::size_t(c)];
+    const Eigen::Isometry3f bin_to_model = slot_[std::size_t(c)].model_to_bin.inverse().cast<float>();
+    const int* cells = &rb_.region_cells[std::size_t(region.cells_begin)];
+    for (int k = 0; k < region.cells_end - region.cells_begin; ++k) {
+      const Eigen::Vector3f p = bin_to_model * zb_.point(cells[k] % w, cells[k] / w);
+      const LocatorModel::Sample* s = lm_.nearest_sample(p);
+      explained_[std::size_t(k)] = s && (p - s->p).squaredNorm() <= near_mm * near_mm;
+    }
+    out_.regions.leftover +=
+        add_leftover_region(zb_, nm_, cfg_, lm_.tube_d_mm, lm_.extent_l_mm, c, explained_.data(), &rb_) >= 0;
+  }
+  out_.regions.candidates = int(rb_.candidates.size());
+  std::atomic<int> next{first};
+  const int end = int(rb_.candidates.size());
+  if (end == first) return;
+  pool_.run(pool_.size(), [&](int, int worker) {
+    for (int c = next++; c < end; c = next++) candidate_task(f, c, worker);
+  });
+}
+
 void Locator::merge_estimate(int c) {
   PipeEstimate& e = slot_[std::size_t(c)];
   CandidateTrace& trace = out_.traces[std::size_t(c)];
-  // Two regions of one pipe give one estimate: keep the better.
+  // Two regions of one pipe give one estimate: keep the better. A leftover region is there for
+  // another pipe: what it finds of one already found is dropped (a short leftover of a pipe's own
+  // region, its ends less placed, would take a pickable pose's place).
   for (auto& other : out_.estimates) {
     const float same_pipe_mm = 2 * lm_.tube_d_mm;
     if (pose_distance_mm(lm_, other.model_to_bin, e.model_to_bin, same_pipe_mm) > same_pipe_mm) continue;
-    if (other.check.agreement() >= e.check.agreement()) {
+    if (other.check.agreement() >= e.check.agreement() || c >= first_leftover_) {
       trace.outcome = CandidateOutcome::duplicate;
       return;
     }

@@ -86,6 +86,9 @@ class Locator {
   void candidate_task(const Frame& f, int c, int worker);
   void work_candidate(int c, Worker& wk, const Frame& f);
   void merge_estimate(int c);
+  // Candidates of what the accepted poses of candidates [0, n) left of their regions, worked
+  // before the deadline (leftover_regions).
+  void leftover_candidates(const Frame& f, int n);
   // Row bands of the frame-wide stages: band b of n covers rows [band_begin(b), band_begin(b + 1)).
   static int band_begin(int band, int bands, int rows) { return rows * band / bands; }
   void build_zbuffer_banded(const Image<float>& depth, const CameraInfo& camera, const Pose& bin_to_cam);
@@ -114,6 +117,8 @@ class Locator {
   std::vector<Eigen::Vector3f> ridge_pts_;  // observed ridges of all candidates
   std::vector<PipeEstimate> slot_;          // per candidate: its estimate, if accepted
   std::vector<char> slot_filled_;
+  int first_leftover_ = 0;               // this frame's first candidate of a leftover region
+  std::vector<std::uint8_t> explained_;  // per cell of a region: its pose explains it (leftover_candidates)
   LocateOutput out_;
   int ridge_capacity_ = 0;
   const std::atomic<bool>* cancel_ = nullptr;

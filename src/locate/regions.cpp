@@ -113,6 +113,66 @@ float longest_distance(const ZBuffer& zb, const int* cells, int count) {
   return longest;
 }
 
+int add_leftover_region(const ZBuffer& zb, const NormalMap& nm, const LocateConfig& cfg, float d, float l,
+                        int c, const std::uint8_t* explained, RegionBuffers* rb) {
+  const int slot = int(rb->candidates.size());
+  if (slot >= cfg.max_candidates) return -1;
+  const CandidateRegion& from = rb->candidates[std::size_t(c)];
+  const int* cells = &rb->region_cells[std::size_t(from.cells_begin)];
+  const int n = from.cells_end - from.cells_begin;
+  const float cell_area = float(zb.pixel_mm * zb.pixel_mm);
+  const float area_min = float(cfg.core_min_area_of_d2) * d * d;
+  const float up_min = float(std::cos(cfg.upward_normal_max_deg * kDeg));
+  const auto upward = [&](int cell) { return nm.n.pixels[std::size_t(cell)].z() > up_min; };
+  int open_up = 0;
+  for (int k = 0; k < n; ++k) open_up += !explained[k] && upward(cells[k]);
+  if (float(open_up) * cell_area < area_min) return -1;
+  // The cells left are marked `left`; each piece, labelled into grow_queue, is marked `left + 1`.
+  const int left = fresh_marks(&rb->stamp, &rb->stamp_value, 2);
+  for (int k = 0; k < n; ++k)
+    if (!explained[k]) rb->stamp.pixels[std::size_t(cells[k])] = left;
+  const int w = zb.z.width;
+  int* out = &rb->region_cells[std::size_t(slot) * std::size_t(rb->max_region_cells)];
+  int best = 0;
+  for (int k = 0; k < n; ++k) {
+    if (rb->stamp.pixels[std::size_t(cells[k])] != left) continue;
+    int count = 0;
+    rb->grow_queue[count++] = pack(cells[k] % w, cells[k] / w);
+    rb->stamp.pixels[std::size_t(cells[k])] = left + 1;
+    for (int head = 0; head < count; ++head) {
+      const int ci = column_of(rb->grow_queue[head]), cj = row_of(rb->grow_queue[head]);
+      for (int q = 0; q < 8; ++q) {
+        const int ni = ci + kDi[q], nj = cj + kDj[q];
+        if (ni < 0 || nj < 0 || ni >= zb.width || nj >= zb.height) continue;
+        int& mark = rb->stamp.at(ni, nj);
+        if (mark != left) continue;
+        mark = left + 1;
+        rb->grow_queue[count++] = pack(ni, nj);
+      }
+    }
+    if (count <= best) continue;
+    best = count;
+    for (int q = 0; q < count; ++q) out[q] = row_of(rb->grow_queue[q]) * w + column_of(rb->grow_queue[q]);
+  }
+  // Like a core: upward cells of at least A_th, whose centroid places the axis (III).
+  Eigen::Vector3f centroid = Eigen::Vector3f::Zero();
+  int up = 0;
+  for (int q = 0; q < best; ++q)
+    if (upward(out[q])) centroid += zb.point(out[q] % w, out[q] / w), ++up;
+  if (float(up) * cell_area < area_min) return -1;
+  const float extent = longest_distance(zb, out, best);
+  if (extent < float(std::min(cfg.short_region_min_extent_of_l, cfg.region_min_extent_of_l)) * l) return -1;
+  CandidateRegion r;
+  r.core_begin = r.core_end = 0;  // no core of its own
+  r.cells_begin = slot * rb->max_region_cells;
+  r.cells_end = r.cells_begin + best;
+  r.core_centroid = centroid / float(up);
+  r.core_area_mm2 = float(up) * cell_area;
+  r.short_region = extent < float(cfg.region_min_extent_of_l) * l;
+  rb->candidates.push_back(r);
+  return slot;
+}
+
 float share_under_others(const ZBuffer& zb, const int* cells, int n, float d) {
   const int reach = std::max(1, int(std::lround(d / zb.pixel_mm)));
   const float rise = kCoveringRiseOfD * d;

@@ -51,6 +51,7 @@ struct RegionStats {
   int short_regions = 0;       // shorter than a * L (and than short_region_min_extent_of_l * L)
   int short_candidates = 0;    // candidates shorter than a * L, tried after the long ones
   int joined = 0;              // long enough once joined to pieces continuing them across gaps
+  int leftover = 0;            // candidates of what a pose found in a region left of it (add_leftover_region)
 };
 
 void reserve_regions(RegionBuffers* rb, const ZBuffer& zb, const LocateConfig& cfg, float tube_d_mm,
@@ -75,6 +76,15 @@ using OnCandidateFound = void (*)(void* context, int found);
 RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, const LocateConfig& cfg,
                                       float tube_d_mm, float extent_l_mm, RegionBuffers* rb,
                                       OnCandidateFound on_found = nullptr, void* context = nullptr);
+
+// Beyond the paper: one region can hold two pipes (pipes end to end in a core kept whole, a
+// neighbour the growth ran onto) and its fit takes at most one. The cells of candidate c's region
+// that its pose does not explain (explained[k] zero for its k-th cell): their largest connected
+// piece becomes a candidate of its own when it holds upward cells of a core's least area and
+// reaches short_region_min_extent_of_l * L. Returns the new candidate's index, or -1 (also when
+// max_candidates are taken).
+int add_leftover_region(const ZBuffer& zb, const NormalMap& nm, const LocateConfig& cfg, float tube_d_mm,
+                        float extent_l_mm, int c, const std::uint8_t* explained, RegionBuffers* rb);
 
 // Longest distance between two of the points (extreme points along 13 directions, then exact
 // among those): l_max of Algorithm 1.
