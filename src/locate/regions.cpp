@@ -32,6 +32,13 @@ constexpr int kCoveredSamples = 200;
 const int kDi[8] = {-1, 0, 1, -1, 1, -1, 0, 1};
 const int kDj[8] = {-1, -1, -1, 0, 0, 1, 1, 1};
 
+// A cell is upward (II-B's N . Nv > cos N_th1) where its normal's z exceeds this.
+float upward_min_z(const LocateConfig& cfg) { return float(std::cos(cfg.upward_normal_max_deg * kDeg)); }
+// The least extent of a region tried at all: short ones down to short_region_min_extent_of_l * L.
+float short_min_extent_mm(const LocateConfig& cfg, float l) {
+  return float(std::min(cfg.short_region_min_extent_of_l, cfg.region_min_extent_of_l)) * l;
+}
+
 // Breadth-first queues keep each cell's column and row packed in one int beside its buffer
 // index: no division per visited cell.
 int pack(int i, int j) { return (j << 16) | i; }
@@ -122,7 +129,7 @@ int add_leftover_region(const ZBuffer& zb, const NormalMap& nm, const LocateConf
   const int n = from.cells_end - from.cells_begin;
   const float cell_area = float(zb.pixel_mm * zb.pixel_mm);
   const float area_min = float(cfg.core_min_area_of_d2) * d * d;
-  const float up_min = float(std::cos(cfg.upward_normal_max_deg * kDeg));
+  const float up_min = upward_min_z(cfg);
   const auto upward = [&](int cell) { return nm.n.pixels[std::size_t(cell)].z() > up_min; };
   int open_up = 0;
   for (int k = 0; k < n; ++k) open_up += !explained[k] && upward(cells[k]);
@@ -161,7 +168,7 @@ int add_leftover_region(const ZBuffer& zb, const NormalMap& nm, const LocateConf
     if (upward(out[q])) centroid += zb.point(out[q] % w, out[q] / w), ++up;
   if (float(up) * cell_area < area_min) return -1;
   const float extent = longest_distance(zb, out, best);
-  if (extent < float(std::min(cfg.short_region_min_extent_of_l, cfg.region_min_extent_of_l)) * l) return -1;
+  if (extent < short_min_extent_mm(cfg, l)) return -1;
   CandidateRegion r;
   r.core_begin = r.core_end = 0;  // no core of its own
   r.cells_begin = slot * rb->max_region_cells;
@@ -193,7 +200,7 @@ float share_under_others(const ZBuffer& zb, const int* cells, int n, float d) {
 
 void mark_upward_rows(const ZBuffer& zb, const NormalMap& nm, const LocateConfig& cfg, int row_begin,
                       int row_end, RegionBuffers* rb) {
-  const float up_min = float(std::cos(cfg.upward_normal_max_deg * kDeg));
+  const float up_min = upward_min_z(cfg);
   Image<std::uint8_t>& open = rb->unlabelled_core;
   for (int j = row_begin; j < row_end; ++j)
     for (int i = 0; i < zb.width; ++i) open.at(i, j) = nm.n.at(i, j).z() > up_min;
@@ -213,7 +220,7 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
   const float area_min = float(cfg.core_min_area_of_d2) * d * d;
   const float core_extent_max = float(cfg.core_max_extent_of_l) * l;
   const float whole_extent_max = float(cfg.core_whole_max_extent_of_l) * l;
-  const float up_min = float(std::cos(cfg.upward_normal_max_deg * kDeg));
+  const float up_min = upward_min_z(cfg);
   const int bridge_cells = int(cfg.hole_bridge_of_d * d / zb.pixel_mm);
 
   // Upward cells were marked once (mark_upward_rows); labelling reads one byte per neighbour.
@@ -669,8 +676,7 @@ RegionStats extract_candidate_regions(const ZBuffer& zb, const NormalMap& nm, co
   // ones (a top strip broken into pieces the joins did not mend, a pipe partly out of view), when
   // it reaches short_region_min_extent_of_l * L: its fit and the verification judge it, and it
   // cannot take a long region's place among the max_candidates.
-  const float short_min_extent =
-      float(std::min(cfg.short_region_min_extent_of_l, cfg.region_min_extent_of_l)) * l;
+  const float short_min_extent = short_min_extent_mm(cfg, l);
   struct Deferred {
     int core;
     float drop;  // grown with
