@@ -234,6 +234,7 @@ void read_locate(Section& s, LocateConfig* c) {
   s.real("refine_inlier_mm", &c->refine_inlier_mm, 0, 50, "mm (0: derived)");
   s.integer("refine_max_points", &c->refine_max_points, 50, 100000, "points");
   s.boolean("refine_on_explained", &c->refine_on_explained);
+  s.boolean("polish_best", &c->polish_best);
   s.boolean("refine_facing_only", &c->refine_facing_only);
   s.real("verify_tolerance_mm", &c->verify_tolerance_mm, 0, 100, "mm (0: derived)");
   s.real("verify_min_agreement", &c->verify_min_agreement, 0, 1, "share");

@@ -432,12 +432,10 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
   const Eigen::Vector3f camera_bin =
       cfg.refine_facing_only ? Eigen::Vector3f(ctx.bin_to_cam.inverse().translation().cast<float>())
                              : Eigen::Vector3f::Constant(NAN);
-  // Refines a hypothesis on observed points (the region's; a twin's, those the best explains),
-  // has the image judge it, and keeps the best two that are more than ambiguity_pose_mm apart.
-  // Returns the hypothesis as judged.
-  // A turn of the found pose about its length (is_turn) replaces it only as turn_may_replace() says.
-  const auto judge = [&](const Pose& start, float ridge_cost_mm, const Eigen::Vector3f* points,
-                         int n_points, bool is_turn = false) {
+  // Refines a hypothesis on observed points (the region's; a twin's, those the best explains) and
+  // has the image judge it.
+  const auto refine_and_check = [&](const Pose& start, float ridge_cost_mm, const Eigen::Vector3f* points,
+                                    int n_points) {
     auto t0 = Clock::now();
     RefineResult refined = refine_on_surface(lm, start, points, n_points, cfg, camera_bin);
     int refined_on = n_points;
@@ -491,6 +489,14 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
     e.refine_points = refined_on;
     e.refine_rms_mm = refined.rms_mm;
     e.candidate = in.index;
+    return e;
+  };
+  // Keeps the best two hypotheses that are more than ambiguity_pose_mm apart. Returns the
+  // hypothesis as judged. A turn of the found pose about its length (is_turn) replaces it only as
+  // turn_may_replace() says.
+  const auto judge = [&](const Pose& start, float ridge_cost_mm, const Eigen::Vector3f* points, int n_points,
+                         bool is_turn = false) {
+    const PipeEstimate e = refine_and_check(start, ridge_cost_mm, points, n_points);
     const float q = hypothesis_quality(e.check);
     if (is_turn && have_best && !turn_may_replace(e.check, best.check)) return e;
     if (!have_best || q > hypothesis_quality(best.check)) {
@@ -516,6 +522,15 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
     ++tried;
     judge(fits[i].pose, fits[i].cost_mm, buf->region_pts.data(), refine_count);
   }
+  // The points the best explains, in buf->found_pts, if enough to refine on (else 0).
+  const auto explained_by_best = [&] {
+    const auto t0 = Clock::now();
+    const Verification v = verify_at(best.model_to_cam);
+    const int n =
+        explained_points(ctx, buf->scratch_depth, v, float(cfg.verify_tolerance_mm), &buf->found_pts);
+    buf->times.verify_ms += ms_since(t0);
+    return n < kMinExplainedPoints ? 0 : n;
+  };
   // Beyond the paper: a near-symmetric part (a half-turn maps most of it onto itself) seen only
   // where the two poses agree fits both equally; the ridge ICP need not have reached the other.
   // The twin of the best hypothesis is judged too, so that the ambiguity is found, or the twin
@@ -528,15 +543,7 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
   for (int round = 0; have_best && round < kTwinRounds && !ctx.model.near_symmetries.empty(); ++round) {
     const Pose found = best.model_to_bin;  // judging a twin may replace the best: twins of this one
     const float found_cost_mm = best.ridge_cost_mm;
-    int found_count = 0;  // the points the best explains, if enough to refine on
-    if (cfg.refine_on_explained) {
-      const auto t0 = Clock::now();
-      const Verification v = verify_at(best.model_to_cam);
-      found_count =
-          explained_points(ctx, buf->scratch_depth, v, float(cfg.verify_tolerance_mm), &buf->found_pts);
-      if (found_count < kMinExplainedPoints) found_count = 0;
-      buf->times.verify_ms += ms_since(t0);
-    }
+    const int found_count = cfg.refine_on_explained ? explained_by_best() : 0;
     for (const Pose& half_turn : ctx.model.near_symmetries) {
       const Pose twin = found * half_turn;
       // A runner-up the region refined stands for the twin only if the twin is refined there too.
@@ -583,6 +590,23 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
         continue;
       if (deadline.passed()) return out;
       judge(slid, found_cost_mm, buf->region_pts.data(), refine_count);
+    }
+  }
+  // Beyond the paper: the best polished. Of the hypotheses that are one reading, the image's
+  // judgement took the one it confirms best, which does not tell a turn of 10-30 degrees about a
+  // short pipe's length (a count of pixels within the tolerance); refined once more on all the
+  // image shows of it, the pose settles where the points put it. Kept where the image confirms it
+  // as well, shows its ends as well (as a turn: an end lost weakens the best against its rival,
+  // and 20-3D's bin stopped with a pipe left) and it stays the same reading. Not for a pipe that
+  // slides along itself: refined on all it explains, it slides (its slides are judged apart).
+  if (cfg.polish_best && cfg.refine_on_explained && have_best && lm.slides.empty()) {
+    const int n = explained_by_best();
+    if (n > 0 && !deadline.passed()) {
+      const PipeEstimate polished =
+          refine_and_check(best.model_to_bin, best.ridge_cost_mm, buf->found_pts.data(), n);
+      if (as_good(polished.check, best.check, cfg) && turn_may_replace(polished.check, best.check) &&
+          !rivals(best, polished))
+        best = polished;
     }
   }
   // Beyond the paper: where the best and a rival about as good differ (a near twin's longer leg,

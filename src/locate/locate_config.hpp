@@ -108,6 +108,9 @@ struct LocateConfig {
   int refine_max_points = 1500;            // observed points used by the refinement
   bool refine_on_explained = true;  // then again on every pixel the refined pose explains (the
                                     // whole pipe seen, not only its region's top strip), if better
+  bool polish_best = true;          // the best reading refined once more on every pixel it explains, kept
+                                    // where the image confirms it and shows its ends as well and it
+                                    // stays the same reading (not for a pipe that slides along itself)
   bool refine_facing_only = true;  // a point pairs only with model surface facing the camera (a
                                    // reading beside a thin tube is not its hidden underside; not for
                                    // a pipe that slides along itself: surface_refine.hpp)
