@@ -64,6 +64,29 @@ inline double nearest_pipe_error(const PipeModel& m, const Pose& pose, const Sim
   return best;
 }
 
+// How well a localizer places a scene's top pipes: how many there are, how many an estimate lies
+// within 5 mm of, and the error summed over those within 10 mm (pose_error_with_turns).
+struct TopPipesPlaced {
+  int top = 0, within_5 = 0, within_10 = 0;
+  double error_sum = 0;
+  double mean_error() const { return error_sum / std::max(1, within_10); }
+};
+
+inline void place_top_pipes(const PipeModel& model, const SimulatedScene& s, const LocateConfig& cfg,
+                            TopPipesPlaced* placed) {
+  Locator loc(model, cfg, s.camera.intrinsics);
+  const LocateOutput& out = loc.locate(s.depth_mm, s.camera);
+  for (std::size_t g = 0; g < s.model_to_world.size(); ++g) {
+    if (!s.info[g].top) continue;
+    ++placed->top;
+    double best = 1e9;
+    for (const PipeEstimate& e : out.estimates)
+      best = std::min(best, pose_error_with_turns(model, e.model_to_cam, s.model_to_cam(g)));
+    placed->within_5 += best < 5;
+    if (best < 10) placed->error_sum += best, ++placed->within_10;
+  }
+}
+
 // Fills a Z-buffer with z = f(x, y) on a 1 mm grid.
 template <typename F>
 ZBuffer synthetic_zbuffer(int size, F f) {

@@ -119,31 +119,20 @@ TEST(Locator, StraightTubesOnAPileAreFound) {
 // ten: the top pipes found within 10 mm are 1.2 mm off on average (MSSD), 2.4 mm without.
 TEST(Locator, ALongBendIsPlacedByAllTheImageShowsOfIt) {
   const PipeModel model = pipe_of("S85,B-134r188,S104", 23.3, "bend");
-  int found_on = 0, found_off = 0, top = 0, n_on = 0, n_off = 0;
-  double err_on = 0, err_off = 0;
+  TopPipesPlaced on, off;
   for (unsigned seed = 1; seed <= 6; ++seed) {
     const SimulatedScene s = pile_of(model, 10, seed);
-    for (const bool on : {true, false}) {
+    for (const bool refine_on_explained : {true, false}) {
       LocateConfig cfg;
-      cfg.refine_on_explained = on;
-      Locator loc(model, cfg, s.camera.intrinsics);
-      const LocateOutput& out = loc.locate(s.depth_mm, s.camera);
-      for (std::size_t g = 0; g < s.model_to_world.size(); ++g) {
-        if (!s.info[g].top) continue;
-        top += on;
-        double best = 1e9;
-        for (const PipeEstimate& e : out.estimates)
-          best = std::min(best, pose_error_with_turns(model, e.model_to_cam, s.model_to_cam(g)));
-        (on ? found_on : found_off) += best < 5;
-        if (best < 10) (on ? err_on : err_off) += best, (on ? n_on : n_off) += 1;
-      }
+      cfg.refine_on_explained = refine_on_explained;
+      place_top_pipes(model, s, cfg, refine_on_explained ? &on : &off);
     }
   }
-  ASSERT_GT(top, 5);
-  ASSERT_GT(n_on, 5);
-  ASSERT_GT(n_off, 5);
-  EXPECT_GE(found_on, found_off);
-  EXPECT_LT(err_on / n_on, 0.7 * err_off / n_off) << err_on / n_on << " mm against " << err_off / n_off;
+  ASSERT_GT(on.top, 5);
+  ASSERT_GT(on.within_10, 5);
+  ASSERT_GT(off.within_10, 5);
+  EXPECT_GE(on.within_5, off.within_5);
+  EXPECT_LT(on.mean_error(), 0.7 * off.mean_error()) << on.mean_error() << " mm against " << off.mean_error();
 }
 
 // A short S (16.7 mm tube, 69 mm long, the zoo's 09-S-sym): the image's judgement of its
@@ -153,35 +142,25 @@ TEST(Locator, ALongBendIsPlacedByAllTheImageShowsOfIt) {
 // within 10 mm) 222 within 5 mm against 217, the mean error 2.64 mm against 2.74.
 TEST(Locator, AShortSIsPolishedWhereItsPointsPutIt) {
   const PipeModel model = pipe_of("S21.4,B51.4r13.4,B-51.4r13.4,S21.4", 16.7, "short S");
-  int found_on = 0, found_off = 0, n_on = 0, n_off = 0;
-  double err_on = 0, err_off = 0;
+  TopPipesPlaced on, off;
   for (unsigned seed = 1; seed <= 16; ++seed) {
     std::mt19937 rng(40 + seed);
     SceneParams p;  // as the zoo's: 25 pipes, the camera 1 m up and tilted up to 25 degrees
     p.pile.pipes = 25;
     p.max_tilt_deg = 25;
     const SimulatedScene s = simulate_scene(model, p, rng);
-    for (const bool on : {true, false}) {
+    for (const bool polish : {true, false}) {
       LocateConfig cfg;
-      cfg.polish_best = on;
-      Locator loc(model, cfg, s.camera.intrinsics);
-      const LocateOutput& out = loc.locate(s.depth_mm, s.camera);
-      for (std::size_t g = 0; g < s.model_to_world.size(); ++g) {
-        if (!s.info[g].top) continue;
-        double best = 1e9;
-        for (const PipeEstimate& e : out.estimates)
-          best = std::min(best, pose_error(model, e.model_to_cam, s.model_to_cam(g)));
-        (on ? found_on : found_off) += best < 5;
-        if (best < 10) (on ? err_on : err_off) += best, (on ? n_on : n_off) += 1;
-      }
+      cfg.polish_best = polish;
+      place_top_pipes(model, s, cfg, polish ? &on : &off);
     }
   }
-  std::printf("short S: found within 5 mm %d polished, %d not; mean error %.2f / %.2f mm over %d / %d\n",
-              found_on, found_off, err_on / std::max(1, n_on), err_off / std::max(1, n_off), n_on, n_off);
-  ASSERT_GT(n_on, 10);
-  ASSERT_GT(n_off, 10);
-  EXPECT_GE(found_on, found_off);
-  EXPECT_LT(err_on / n_on, err_off / n_off);
+  std::printf("short S: found within 5 mm %d polished, %d not; mean error %.2f / %.2f mm over %d / %d\n", on.within_5,
+              off.within_5, on.mean_error(), off.mean_error(), on.within_10, off.within_10);
+  ASSERT_GT(on.within_10, 10);
+  ASSERT_GT(off.within_10, 10);
+  EXPECT_GE(on.within_5, off.within_5);
+  EXPECT_LT(on.mean_error(), off.mean_error());
 }
 
 // A long bend with legs of 85 and 104 mm: its half-turn twin lies on the same pipe, a leg's
