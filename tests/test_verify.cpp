@@ -46,5 +46,40 @@ TEST(Verification, SkippingBackFacesOfAClosedModelDrawsTheSameDepth) {
   EXPECT_GT(drawn, 3000);
 }
 
+// A pixel without a reading (a sensor's shadow, a specular hole) is neither for nor against a
+// pose: counted apart, neither agreeing nor free space nor in front.
+TEST(Verification, PixelsWithoutAReadingAreCountedApart) {
+  const PipeModel& model = preset_model("u");
+  const Mesh welded = weld_vertices(model.mesh, model.tube_diameter_mm / 8);
+  const Winding winding = closed_winding(model.mesh);
+  Intrinsics k;
+  k.width = 640, k.height = 480, k.fx = k.fy = 570, k.cx = 320, k.cy = 240;
+  Pose pose = Pose::Identity();
+  pose.linear() = Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  pose.translation() = Eigen::Vector3d(20, -10, 900);
+  Image<float> depth(k.width, k.height, 0.0f), scratch(k.width, k.height, 0.0f);
+  ProjectedMesh projected;
+  projected.reserve(welded);
+  const PixelBox box = render_depth_in_box(welded, pose, k, &depth, &projected, winding);
+  ASSERT_FALSE(box.empty());
+  const auto check = [&] {
+    return verify_pose(welded, winding, pose, depth, k, 7, 5, 0, &scratch, &projected);
+  };
+  const Verification whole = check();
+  ASSERT_GT(whole.model_px, 1000);
+  EXPECT_EQ(whole.agree_px, whole.model_px);
+  EXPECT_EQ(whole.unread_px, 0);
+  // The sensor reads nothing on the left third of the pipe.
+  const int cut = box.x0 + (box.x1 - box.x0) / 3;
+  for (int y = box.y0; y <= box.y1; ++y)
+    for (int x = box.x0; x <= cut; ++x) depth.at(x, y) = 0;
+  const Verification part = check();
+  EXPECT_EQ(part.model_px, whole.model_px);
+  EXPECT_GT(part.unread_px, whole.model_px / 10);
+  EXPECT_EQ(part.agree_px + part.unread_px, part.model_px);
+  EXPECT_EQ(part.free_space_px + part.occluded_px, 0);
+  EXPECT_FLOAT_EQ(part.agreement() + part.unread(), 1.0f);
+}
+
 }  // namespace
 }  // namespace pipeloc

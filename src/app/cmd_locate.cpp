@@ -33,12 +33,14 @@ Json verification_json(const Verification& v) {
           {"free_space", v.free_space()},
           {"inner_free_space", v.inner_free_space()},
           {"occluded", v.occluded()},
+          {"unread", v.unread()},
           {"outside_view", v.outside_view},
           {"seen_through_patch", v.seen_through_patch},
           {"side_level", v.side_level()},
           {"side_px", v.side_px},
           {"ends_pinned", v.ends_pinned},
-          {"ends_continued", v.ends_continued}};
+          {"ends_continued", v.ends_continued},
+          {"ends_seen_ending", v.ends_seen_ending}};
 }
 
 Json estimate_json(const PipeEstimate& e, int rank, bool pick) {
@@ -157,10 +159,10 @@ void add_locate(CLI::App& app) {
       const CandidateTrace& tr = out.traces[c];
       spdlog::info(
           "candidate {}: {} (ridge points {}, ridge residual {:.2f} mm, axis sections {}, agreement {:.2f}, "
-          "free space {:.2f} (inside the rim band {:.2f}), occluded {:.2f}, sides level {:.2f})",
+          "free space {:.2f} (inside the rim band {:.2f}), occluded {:.2f}, not read {:.2f}, sides level {:.2f})",
           c, outcome_name(tr.outcome), tr.ridge_count, tr.ridge_cost_mm, tr.axis.best_count,
           tr.check.agreement(), tr.check.free_space(), tr.check.inner_free_space(), tr.check.occluded(),
-          tr.check.side_level());
+          tr.check.unread(), tr.check.side_level());
     }
     if (!opt->overlay.empty()) {
       write_rgb_png(opt->overlay, draw_locate_overlay(locator, depth, sized));

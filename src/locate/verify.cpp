@@ -93,7 +93,10 @@ Verification verify_pose(const Mesh& mesh, Winding winding, const Pose& model_to
       const bool judged_for_free_space = inner(x, y);
       v.inner_px += judged_for_free_space;
       const float zo = depth.at(x, y);
-      if (!(zo > 0)) continue;  // no reading: neither for nor against
+      if (!(zo > 0)) {  // no reading: neither for nor against
+        ++v.unread_px;
+        continue;
+      }
       if (zo > zm + tol) {
         ++v.free_space_px;
         v.inner_free_space_px += judged_for_free_space;

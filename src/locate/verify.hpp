@@ -21,7 +21,9 @@ struct Verification {
   int inner_px = 0;       // model pixels farther than the free-space band from the rim ...
   int inner_free_space_px = 0;  // ... and those of them the sensor saw through
   int occluded_px = 0;    // measured nearer: something lies in front (another pipe, or the pose sank in)
+  int unread_px = 0;      // no reading (a sensor's shadow, a specular hole): neither for nor against
   float agreement() const { return model_px ? float(agree_px) / float(model_px) : 0.f; }
+  float unread() const { return model_px ? float(unread_px) / float(model_px) : 0.f; }
   float free_space() const { return model_px ? float(free_space_px) / float(model_px) : 1.f; }
   // What the free-space check judges: a right pose a little to the side, or a sensor blending
   // fore- and background at the edge, sees through the model in the band; not inside it. A
