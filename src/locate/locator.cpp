@@ -237,7 +237,6 @@ void Locator::leftover_candidates(const Frame& f, int n) {
   // (the voxel index names the nearest surface sample within a voxel's half diagonal).
   const float near_mm = float(cfg_.verify_tolerance_mm) + 0.5f * std::sqrt(3.0f) * LocatorModel::voxel_mm;
   const int w = zb_.z.width;
-  const int first = n;
   for (int c = 0; c < n; ++c) {
     if (!slot_filled_[std::size_t(c)]) continue;
     const CandidateRegion& region = rb_.candidates[std::size_t(c)];
@@ -252,9 +251,9 @@ void Locator::leftover_candidates(const Frame& f, int n) {
         add_leftover_region(zb_, nm_, cfg_, lm_.tube_d_mm, lm_.extent_l_mm, c, explained_.data(), &rb_) >= 0;
   }
   out_.regions.candidates = int(rb_.candidates.size());
-  std::atomic<int> next{first};
+  std::atomic<int> next{n};
   const int end = int(rb_.candidates.size());
-  if (end == first) return;
+  if (end == n) return;
   pool_.run(pool_.size(), [&](int, int worker) {
     for (int c = next++; c < end; c = next++) candidate_task(f, c, worker);
   });
