@@ -23,6 +23,12 @@ Verification with_sides(Verification v, int side_px, int level) {
   return v;
 }
 
+// `px` of its pixels without a reading (a sensor's shadow, a specular hole).
+Verification unread(Verification v, int px) {
+  v.unread_px = px;
+  return v;
+}
+
 Verification outside_view(Verification v, float share) {
   v.outside_view = share;
   return v;
@@ -169,6 +175,19 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
        false, true, 0.9f},
       {"accepted under another pipe", judged(seen(800, 0, 200)), true, CandidateOutcome::accepted, false,
        false, 0.64f},
+      // A pose both its ends are seen ending (the tip shown, every probe beyond read and lower) is
+      // confirmed on the pixels the sensor read, at least verify_min_read_share (half) of them
+      // counted; the score still counts the unread ones as not confirmed.
+      {"a third not read, both ends seen ending, what was read confirmed",
+       seen_ending(ends_read(judged(unread(seen(650, 0, 0), 350)), 2, 0, 0, 0), 2), true,
+       CandidateOutcome::accepted, false, true, 0.65f},
+      {"the same, one end seen ending", seen_ending(ends_read(judged(unread(seen(650, 0, 0), 350)), 2, 0, 0, 0), 1),
+       true, CandidateOutcome::not_confirmed, false, false, 0},
+      {"the same, both ends pinned, neither seen ending", ends_read(judged(unread(seen(650, 0, 0), 350)), 2, 0, 0, 0),
+       true, CandidateOutcome::not_confirmed, false, false, 0},
+      {"seven tenths not read: half counted",
+       seen_ending(ends_read(judged(unread(seen(300, 0, 0), 700)), 2, 0, 0, 0), 2), true,
+       CandidateOutcome::not_confirmed, false, false, 0},
       // Out of the view the image checks nothing: that part counts as not confirmed, and the
       // image must still confirm verify_min_agreement of the whole pipe.
       {"a fifth out of the view, the rest confirmed", judged(outside_view(seen(900, 0, 0), 0.2f)), true,
@@ -358,6 +377,10 @@ TEST(Decide, ThresholdsComeFromTheConfig) {
   EXPECT_TRUE(decide(told_apart, cfg).ambiguous);
   cfg.ambiguity_quality_margin = 0.01;
   EXPECT_FALSE(decide(judged_with_rival(seen(900, 0, 0), seen(860, 0, 0)), cfg).ambiguous);
+  const Evidence half_read = seen_ending(ends_read(judged(unread(seen(450, 0, 0), 550)), 2, 0, 0, 0), 2);
+  EXPECT_EQ(decide(half_read, cfg).outcome, CandidateOutcome::accepted);  // 450 of 500 counted
+  cfg.verify_min_read_share = 1;  // off: unread pixels count against the pose
+  EXPECT_EQ(decide(half_read, cfg).outcome, CandidateOutcome::not_confirmed);
 }
 
 // A pose turned about the pipe's length takes the found one's place only where the image shows

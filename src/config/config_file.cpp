@@ -238,6 +238,7 @@ void read_locate(Section& s, LocateConfig* c) {
   s.boolean("refine_facing_only", &c->refine_facing_only);
   s.real("verify_tolerance_mm", &c->verify_tolerance_mm, 0, 100, "mm (0: derived)");
   s.real("verify_min_agreement", &c->verify_min_agreement, 0, 1, "share");
+  s.real("verify_min_read_share", &c->verify_min_read_share, 0, 1, "share");
   s.real("verify_max_free_space", &c->verify_max_free_space, 0, 1, "share");
   s.real("free_space_band_of_d", &c->free_space_band_of_d, 0, 2, "x D");
   s.real("verify_max_occluded", &c->verify_max_occluded, 0, 1, "share");

@@ -77,6 +77,20 @@ bool as_good(const Verification& rival, const Verification& best, const LocateCo
 // going on beyond an end (the pipe lies elsewhere along it) twice as much against.
 int ends_shown(const Verification& v) { return v.ends_pinned - 2 * v.ends_continued; }
 
+// The agreement the checks for a confirmed pose judge. Beyond the paper: a pose the image places
+// by both its ends, each seen ending outright (the tip shown, every probe beyond it read and
+// lower), is judged on what the sensor read of it: the pixels it did not read (a shadow, a glint
+// hole) are neither for nor against, down to verify_min_read_share of the pipe counted. One end
+// pinned is not enough: a coil slid along its helix, both ends stopped short by the pile, hid
+// where it disagrees in unread pixels (a wrong pick in 12 coil bins), and so did poses over
+// clutter in real frames without pipes (7 more picks). Choosing between hypotheses and the score
+// still count unread pixels as not confirmed: of two poses, the one the image reads more of goes
+// first.
+float confirmed_agreement(const Verification& v, const LocateConfig& cfg) {
+  const bool placed = v.ends_seen_ending >= 2 && v.ends_continued == 0;
+  return placed ? v.read_agreement(float(cfg.verify_min_read_share)) : v.agreement();
+}
+
 // Where the best's and a rival's renders differ, the pixels show `a` and hardly `b`: at least
 // kMinTellingPx for it and at most 1 / kTellingRatio of that for the other.
 bool pixels_show(int for_a, int for_b) { return for_a >= kMinTellingPx && kTellingRatio * for_b <= for_a; }
@@ -109,7 +123,7 @@ constexpr Check kChecks[] = {
      }},
     {CandidateStage::hypotheses, CandidateOutcome::not_confirmed,
      [](const Evidence& e, const LocateConfig& cfg) {
-       return !(e.best.agreement() < float(cfg.verify_min_agreement));
+       return !(confirmed_agreement(e.best, cfg) < float(cfg.verify_min_agreement));
      }},
     {CandidateStage::hypotheses, CandidateOutcome::not_confirmed,
      [](const Evidence& e, const LocateConfig& cfg) {
@@ -224,7 +238,7 @@ Decision decide(const Evidence& given, const LocateConfig& cfg) {
   // under something in front, at most verify_max_outside_view of it out of the view, and what
   // the image confirms is still verify_min_agreement of the whole pipe, the part out of the view
   // counted as not confirmed (a pose hanging out of the view is checked on too little of it) ...
-  const float confirmed_of_whole = e.best.agreement() * (1.0f - e.best.outside_view);
+  const float confirmed_of_whole = confirmed_agreement(e.best, cfg) * (1.0f - e.best.outside_view);
   // ... or, up to verify_max_outside_view_well_seen of it out of the view, the image confirms
   // verify_well_seen_agreement of what is in view, and, where the ends are read, shows one of
   // them. From a short region only for a pipe that does not slide along itself, its ends read and
@@ -236,7 +250,7 @@ Decision decide(const Evidence& given, const LocateConfig& cfg) {
                                 confirmed_of_whole >= float(cfg.verify_min_agreement)) ||
                                ((!e.short_region || short_but_placed) &&
                                 e.best.outside_view <= float(cfg.verify_max_outside_view_well_seen) &&
-                                e.best.agreement() >= float(cfg.verify_well_seen_agreement) &&
+                                confirmed_agreement(e.best, cfg) >= float(cfg.verify_well_seen_agreement) &&
                                 (!e.ends_judged || e.best.ends_pinned > 0));
   // Beyond the paper: where the image shows the tube going on beyond both ends of the pose, the
   // pipe there is longer than the pose: it lies elsewhere along it (slid round a bend, across
@@ -582,7 +596,7 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
     // shows the same surface wherever its ends are not seen: the slid poses are rivals too.
     // Far slides only for a pose the image confirms: they look for its twin along the pipe, not
     // for the pipe (the same zoo figures, 5-9 % less time on arcs and coils).
-    const bool confirmed = !(best.check.agreement() < float(cfg.verify_min_agreement));
+    const bool confirmed = !(confirmed_agreement(best.check, cfg) < float(cfg.verify_min_agreement));
     for (std::size_t k = 0; cfg.judge_slides && k < lm.slides.size(); ++k) {
       if (k >= lm.short_slides && !confirmed) break;
       const Pose slid = found * lm.slides[k];

@@ -119,6 +119,9 @@ struct LocateConfig {
   double verify_tolerance_mm = 7;  // depth agreement, 3 sigma of a Kinect-class sensor's noise at 1.1 m
                                    // (0: 3 sigma of the frame's measured noise, at least 2.5 mm)
   double verify_min_agreement = 0.7;       // share of the model's visible pixels the sensor confirms
+  double verify_min_read_share = 0.5;      // ... of those it read, for a pose both its ends are seen
+                                           // ending, at least this share of them counted (1: unread
+                                           // ones count against it)
   double verify_max_free_space = 0.05;     // share of model pixels where the sensor saw through it ...
   double free_space_band_of_d = 0.125;     // ... not counting a band this * D wide inside the rim
                                            // (in pixels at the pose's distance; 0: the rim only)

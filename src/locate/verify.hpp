@@ -2,10 +2,11 @@
 // the camera image and compared pixel by pixel with what the sensor measured.
 #pragma once
 
-#include "core/camera.hpp"
-#include "core/image.hpp"
+#include <algorithm>
 #include <vector>
 
+#include "core/camera.hpp"
+#include "core/image.hpp"
 #include "core/pose.hpp"
 #include "locate/locate_config.hpp"
 #include "locate/zbuffer.hpp"
@@ -24,6 +25,12 @@ struct Verification {
   int unread_px = 0;      // no reading (a sensor's shadow, a specular hole): neither for nor against
   float agreement() const { return model_px ? float(agree_px) / float(model_px) : 0.f; }
   float unread() const { return model_px ? float(unread_px) / float(model_px) : 0.f; }
+  // The agreement over the pixels the sensor read, at least min_read_share of the model's
+  // counted (1: every pixel counts, as agreement()).
+  float read_agreement(float min_read_share) const {
+    const float counted = std::max(float(model_px - unread_px), min_read_share * float(model_px));
+    return counted > 0 ? float(agree_px) / counted : 0.f;
+  }
   float free_space() const { return model_px ? float(free_space_px) / float(model_px) : 1.f; }
   // What the free-space check judges: a right pose a little to the side, or a sensor blending
   // fore- and background at the edge, sees through the model in the band; not inside it. A
