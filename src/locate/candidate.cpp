@@ -238,7 +238,8 @@ Decision decide(const Evidence& given, const LocateConfig& cfg) {
   // under something in front, at most verify_max_outside_view of it out of the view, and what
   // the image confirms is still verify_min_agreement of the whole pipe, the part out of the view
   // counted as not confirmed (a pose hanging out of the view is checked on too little of it) ...
-  const float confirmed_of_whole = confirmed_agreement(e.best, cfg) * (1.0f - e.best.outside_view);
+  const float confirmed = confirmed_agreement(e.best, cfg);
+  const float confirmed_of_whole = confirmed * (1.0f - e.best.outside_view);
   // ... or, up to verify_max_outside_view_well_seen of it out of the view, the image confirms
   // verify_well_seen_agreement of what is in view, and, where the ends are read, shows one of
   // them. From a short region only for a pipe that does not slide along itself, its ends read and
@@ -246,12 +247,12 @@ Decision decide(const Evidence& given, const LocateConfig& cfg) {
   // of the view; one that does not is placed by the bends in view and the end shown (23-planar
   // of the zoo: 3 more pipes taken in 3 bins).
   const bool short_but_placed = e.ends_judged && e.best.ends_pinned > 0 && !e.model_slides;
-  const bool checked_in_view = (e.best.outside_view <= float(cfg.verify_max_outside_view) &&
-                                confirmed_of_whole >= float(cfg.verify_min_agreement)) ||
-                               ((!e.short_region || short_but_placed) &&
-                                e.best.outside_view <= float(cfg.verify_max_outside_view_well_seen) &&
-                                confirmed_agreement(e.best, cfg) >= float(cfg.verify_well_seen_agreement) &&
-                                (!e.ends_judged || e.best.ends_pinned > 0));
+  const bool checked_in_view =
+      (e.best.outside_view <= float(cfg.verify_max_outside_view) &&
+       confirmed_of_whole >= float(cfg.verify_min_agreement)) ||
+      ((!e.short_region || short_but_placed) &&
+       e.best.outside_view <= float(cfg.verify_max_outside_view_well_seen) &&
+       confirmed >= float(cfg.verify_well_seen_agreement) && (!e.ends_judged || e.best.ends_pinned > 0));
   // Beyond the paper: where the image shows the tube going on beyond both ends of the pose, the
   // pipe there is longer than the pose: it lies elsewhere along it (slid round a bend, across
   // two pipes).
