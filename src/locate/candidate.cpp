@@ -91,6 +91,11 @@ float confirmed_agreement(const Verification& v, const LocateConfig& cfg) {
   return placed ? v.read_agreement(float(cfg.verify_min_read_share)) : v.agreement();
 }
 
+// The image confirms the pose: verify_min_agreement of it (as confirmed_agreement counts).
+bool confirmed_pose(const Verification& v, const LocateConfig& cfg) {
+  return !(confirmed_agreement(v, cfg) < float(cfg.verify_min_agreement));
+}
+
 // Where the best's and a rival's renders differ, the pixels show `a` and hardly `b`: at least
 // kMinTellingPx for it and at most 1 / kTellingRatio of that for the other.
 bool pixels_show(int for_a, int for_b) { return for_a >= kMinTellingPx && kTellingRatio * for_b <= for_a; }
@@ -122,9 +127,7 @@ constexpr Check kChecks[] = {
        return e.least_ridge_cost_mm <= pursued_residual_mm(cfg, e.tube_d_mm, e.least_ridge_cost_mm);
      }},
     {CandidateStage::hypotheses, CandidateOutcome::not_confirmed,
-     [](const Evidence& e, const LocateConfig& cfg) {
-       return !(confirmed_agreement(e.best, cfg) < float(cfg.verify_min_agreement));
-     }},
+     [](const Evidence& e, const LocateConfig& cfg) { return confirmed_pose(e.best, cfg); }},
     {CandidateStage::hypotheses, CandidateOutcome::not_confirmed,
      [](const Evidence& e, const LocateConfig& cfg) {
        return !(e.best.inner_free_space() > float(cfg.verify_max_free_space));
@@ -597,7 +600,7 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
     // shows the same surface wherever its ends are not seen: the slid poses are rivals too.
     // Far slides only for a pose the image confirms: they look for its twin along the pipe, not
     // for the pipe (the same zoo figures, 5-9 % less time on arcs and coils).
-    const bool confirmed = !(confirmed_agreement(best.check, cfg) < float(cfg.verify_min_agreement));
+    const bool confirmed = confirmed_pose(best.check, cfg);
     for (std::size_t k = 0; cfg.judge_slides && k < lm.slides.size(); ++k) {
       if (k >= lm.short_slides && !confirmed) break;
       const Pose slid = found * lm.slides[k];
