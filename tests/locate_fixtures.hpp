@@ -118,4 +118,24 @@ inline SimulatedScene pile_of(const PipeModel& model, int pipes, unsigned seed) 
   return simulate_scene(model, p, rng);
 }
 
+// A straight model lying with its long axis along the world direction yaw_deg (0: X), its middle
+// over (x, y) and its axis axis_z_mm above the floor.
+inline Pose lying_straight(const PipeModel& model, double yaw_deg, double x, double y, double axis_z_mm) {
+  const Eigen::Matrix3d axes = principal_axes(model.surface.points, model.centroid);
+  Eigen::Matrix3d along_x;  // the model's long axis along world X
+  along_x.row(0) = axes.col(2).transpose();
+  along_x.row(1) = axes.col(1).transpose();
+  along_x.row(2) = along_x.row(0).cross(along_x.row(1));
+  Pose p = Pose::Identity();
+  p.linear() = Eigen::AngleAxisd(yaw_deg * M_PI / 180, Eigen::Vector3d::UnitZ()).toRotationMatrix() * along_x;
+  p.translation() = Eigen::Vector3d(x, y, axis_z_mm) - p.linear() * model.centroid.cast<double>();
+  return p;
+}
+
+// Pipes at the given poses, seen through the sensor model; the camera and the noise drawn from seed.
+inline SimulatedScene scene_of(const PipeModel& model, const std::vector<Pose>& poses, unsigned seed) {
+  std::mt19937 rng(seed);
+  return render_scene(model, poses, SceneParams{}, rng);
+}
+
 }  // namespace pipeloc

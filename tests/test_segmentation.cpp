@@ -167,26 +167,6 @@ TEST(Segmentation, APipeBrokenIntoPiecesIsTriedOnce) {
 // and neither is tried. Split along the valley, each pipe gets a core of its own in some frames
 // (the valley is not always found whole; where it is not, the core is kept whole), and no piece
 // of the floor becomes a candidate.
-// A straight model lying with its long axis along the world direction yaw_deg (0: X), its middle
-// over (x, y) and its axis axis_z_mm above the floor.
-Pose lying_straight(const PipeModel& model, double yaw_deg, double x, double y, double axis_z_mm) {
-  const Eigen::Matrix3d axes = principal_axes(model.surface.points, model.centroid);
-  Eigen::Matrix3d along_x;  // the model's long axis along world X
-  along_x.row(0) = axes.col(2).transpose();
-  along_x.row(1) = axes.col(1).transpose();
-  along_x.row(2) = along_x.row(0).cross(along_x.row(1));
-  Pose p = Pose::Identity();
-  p.linear() = Eigen::AngleAxisd(yaw_deg * M_PI / 180, Eigen::Vector3d::UnitZ()).toRotationMatrix() * along_x;
-  p.translation() = Eigen::Vector3d(x, y, axis_z_mm) - p.linear() * model.centroid.cast<double>();
-  return p;
-}
-
-// Pipes at the given poses, seen through the sensor model; the camera and the noise drawn from seed.
-SimulatedScene scene_of(const PipeModel& model, const std::vector<Pose>& poses, unsigned seed) {
-  std::mt19937 rng(seed);
-  return render_scene(model, poses, SceneParams{}, rng);
-}
-
 TEST(Segmentation, TouchingPipesSideBySideGetACoreEach) {
   const PipeModel model = pipe_of("S200", 20, "straight");
   const double r = 10;

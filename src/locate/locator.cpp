@@ -264,10 +264,16 @@ void Locator::merge_estimate(int c) {
   CandidateTrace& trace = out_.traces[std::size_t(c)];
   // Two regions of one pipe give one estimate: keep the better. A leftover region is there for
   // another pipe: what it finds of one already found is dropped (a short leftover of a pipe's own
-  // region, its ends less placed, would take a pickable pose's place).
+  // region, its ends less placed, would take a pickable pose's place). Two poses are of one pipe
+  // where they lie within 2 D and share kRivalMinSharedTube of the tube, as rival hypotheses do:
+  // two pipes side by side, a diameter apart, share none of it (one of them was dropped as the
+  // other's duplicate: a top pipe each of 04-elbow and 01-straight of the zoo).
   for (auto& other : out_.estimates) {
     const float same_pipe_mm = 2 * lm_.tube_d_mm;
     if (pose_distance_mm(lm_, other.model_to_bin, e.model_to_bin, same_pipe_mm) > same_pipe_mm) continue;
+    if (std::max(shared_tube(lm_, e.model_to_bin, other.model_to_bin),
+                 shared_tube(lm_, other.model_to_bin, e.model_to_bin)) < kRivalMinSharedTube)
+      continue;
     if (other.check.agreement() >= e.check.agreement() || c >= first_leftover_) {
       trace.outcome = CandidateOutcome::duplicate;
       return;
