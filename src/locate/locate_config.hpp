@@ -68,8 +68,10 @@ struct LocateConfig {
   bool leftover_regions = true;     // what an accepted pose leaves of its region unexplained, when
                                     // long enough, is tried as a candidate of its own (false: the
                                     // paper's one pipe per region)
-  double convexity_min_share =
-      0.6;  // of the cells grown straight from a core, at least this share tilt away from it
+  // Of the cells grown straight from a core, at least this share tilt away from it: a majority
+  // (a floor patch between pipes tilts towards it). Not more: the noisy normals of a thin tube
+  // tilt away by a small majority only (the zoo's 8.4 mm elbow: 0.5-0.58 on three top pipes).
+  double convexity_min_share = 0.5;
 
   // III: principal direction by cross-section widths.
   double section_width_min_of_d = 0.85;  // the paper's 0.9R..1.0R, widened by one cell each side
