@@ -271,8 +271,8 @@ void Locator::merge_estimate(int c) {
   for (auto& other : out_.estimates) {
     const float same_pipe_mm = 2 * lm_.tube_d_mm;
     if (pose_distance_mm(lm_, other.model_to_bin, e.model_to_bin, same_pipe_mm) > same_pipe_mm) continue;
-    if (std::max(shared_tube(lm_, e.model_to_bin, other.model_to_bin),
-                 shared_tube(lm_, other.model_to_bin, e.model_to_bin)) < kRivalMinSharedTube)
+    if (shared_tube(lm_, e.model_to_bin, other.model_to_bin) < kRivalMinSharedTube &&
+        shared_tube(lm_, other.model_to_bin, e.model_to_bin) < kRivalMinSharedTube)
       continue;
     if (other.check.agreement() >= e.check.agreement() || c >= first_leftover_) {
       trace.outcome = CandidateOutcome::duplicate;
