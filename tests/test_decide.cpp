@@ -73,6 +73,12 @@ Evidence turn_unsure(Evidence e) {
   return e;
 }
 
+// Found by the second search of its region, on its whole top surface (retry_surface_cell_of_d).
+Evidence searched_again(Evidence e) {
+  e.searched_again = true;
+  return e;
+}
+
 // Found from a region shorter than a * L (tried after the long ones).
 Evidence from_short_region(Evidence e) {
   e.short_region = true;
@@ -175,6 +181,9 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
        false, true, 0.9f},
       {"accepted under another pipe", judged(seen(800, 0, 200)), true, CandidateOutcome::accepted, false,
        false, 0.64f},
+      // Found by the second search of a region: reported, never handed out.
+      {"searched again", searched_again(judged(seen(1000, 0, 0))), true, CandidateOutcome::accepted, false,
+       false, 1.0f},
       // A pose both its ends are seen ending (the tip shown, every probe beyond read and lower) is
       // confirmed on the pixels the sensor read, at least verify_min_read_share (half) of them
       // counted; the score still counts the unread ones as not confirmed.

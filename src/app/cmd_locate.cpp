@@ -113,6 +113,7 @@ void add_locate(CLI::App& app) {
         const Pose ridge_to_cam = bin_to_cam * tr.ridge_pose;
         Json j = {{"candidate", c},
                   {"outcome", outcome_name(tr.outcome)},
+                  {"searched_again", tr.searched_again},
                   {"region_centre_mm",
                    translation_mm(bin_to_cam * Pose(Eigen::Translation3d(tr.axis.centre.cast<double>())))},
                   {"ridge_points", tr.ridge_count},

@@ -80,6 +80,7 @@ struct CandidateTrace {
   Pose refined_to_cam = Pose::Identity();  // the best refined fit, accepted or not
   Verification check;                      // of the best refined fit
   CandidateOutcome outcome = CandidateOutcome::budget;
+  bool searched_again = false;  // the outcome is the second search's, on the whole top surface
 };
 
 // What decide() knows of a candidate: each stage adds its part.
@@ -93,6 +94,7 @@ struct Evidence {
   bool ends_judged = false;                       // the poses' ends were read (pin_slides_by_ends)
   bool has_ends = true;                           // ... the model has a centreline to read them by
   bool short_region = false;                      // the region was shorter than a * L
+  bool searched_again = false;                    // the second search of the region (CandidateInput)
   int ridge_points = 0;                           // observed_ridge: observed Z-ridge points
   float least_ridge_cost_mm = 1e30f;              // ridge_fits: least residual of the states continued
   bool have_best = false, have_second = false;    // hypotheses: the best judged, and a rival
@@ -213,6 +215,7 @@ struct CandidateInput {
   const int* cells = nullptr;  // its cells' indices in the Z-buffer
   Eigen::Vector3f* ridge = nullptr;
   int ridge_capacity = 0;
+  bool searched_again = false;  // the second search of the region, on its whole top surface
 };
 
 // III: principal direction and initial position.

@@ -102,6 +102,10 @@ struct LocateConfig {
   double residual_max_of_d = 0.35;  // R_th = this * D (mean ridge distance; verification follows)
   double residual_rescue_of_rth = 1.5;  // where no fit is under R_th, fits under this * R_th are
                                         // judged by the image instead (1: off, the paper's cut)
+  // Beyond the paper: a region whose ridge fits end in a pose the image does not confirm is
+  // searched again, matching the whole top surface of the region instead of its Z-ridge, on
+  // cells of this * D (at least ridge_cell_mm; probes on twice that). 0: off, the paper's one search.
+  double retry_surface_cell_of_d = 0.25;
   double residual_noise_floor_mm = 0;  // R_th is at least this (set per frame by raise_to_noise, not a key)
   double frame_sigma_mm = 0;           // the frame's measured depth noise (set per frame, not a key)
 
@@ -179,6 +183,7 @@ inline void use_paper_search(LocateConfig* c) {
   c->residual_rescue_of_rth = 1;
   c->short_region_min_extent_of_l = c->region_min_extent_of_l;
   c->leftover_regions = false;
+  c->retry_surface_cell_of_d = 0;
 }
 
 }  // namespace pipeloc

@@ -62,6 +62,8 @@ class Locator {
   // Per-thread working memory for candidates.
   struct Worker {
     CandidateBuffers buf;
+    CandidateBuffers retry_buf;  // for the second search of a region (retry_surface_cell_of_d) ...
+    std::vector<Eigen::Vector3f> retry_ridge;  // ... and its observed surface cells
     int candidates_done = 0;  // this cycle, for the running average of a candidate's time
     double candidate_ms_sum = 0;
   };
@@ -84,7 +86,14 @@ class Locator {
   };
   void regions_and_candidates(Handout& h, int task, int worker);
   void candidate_task(const Frame& f, int c, int worker);
+  CandidateInput candidate_input(int c);
+  // The first search of candidate c; a region whose poses the image did not confirm is listed
+  // for search_again().
   void work_candidate(int c, Worker& wk, const Frame& f);
+  // The second search of the regions listed, on their whole top surface, before the deadline
+  // (retry_surface_cell_of_d); of one region.
+  void search_again(const Frame& f);
+  void search_again(int c, Worker& wk, const Frame& f);
   void merge_estimate(int c);
   // Candidates of what the accepted poses of candidates [0, n) left of their regions, worked
   // before the deadline (leftover_regions).
@@ -105,6 +114,13 @@ class Locator {
   std::vector<int> col_reads_, row_reads_;  // readings per column and row, for the view
   LocatorModel lm_;
   StartSet starts_;
+  // The second search of a region whose ridge fits the image did not confirm: its config as
+  // configured and in effect this frame, and its starts (empty when retry_surface_cell_of_d is 0).
+  LocateConfig retry_user_cfg_, retry_cfg_;
+  StartSet retry_starts_;
+  bool retry_on_surface_ = false;
+  std::vector<int> to_search_again_;    // candidates whose first search was not confirmed ...
+  std::atomic<int> searches_again_{0};  // ... this many this frame
   ZBuffer zb_;
   ZBufferPoints zb_points_;
   int camera_width_ = 0, camera_height_ = 0;

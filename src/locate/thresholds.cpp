@@ -142,4 +142,12 @@ float max_refine_inlier_mm(const LocateConfig& user, float d) {
   return float(std::max(kRefineInlierOfSigma * kMaxSigmaMm, kRefineInlierOfD * double(d)));
 }
 
+LocateConfig surface_retry_config(const LocateConfig& cfg, float tube_d_mm) {
+  LocateConfig out = cfg;
+  out.match_surface = true;
+  out.ridge_cell_mm = std::max(cfg.ridge_cell_mm, cfg.retry_surface_cell_of_d * tube_d_mm);
+  out.icp_probe_cell_mm = std::max(cfg.icp_probe_cell_mm, 2 * out.ridge_cell_mm);
+  return out;
+}
+
 }  // namespace pipeloc

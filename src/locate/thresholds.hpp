@@ -39,6 +39,10 @@ LocateConfig with_model_thresholds(const LocateConfig& user, float tube_d_mm);
 void set_frame_thresholds(const LocateConfig& user, float tube_d_mm, const DepthNoise& noise,
                           const Intrinsics& camera, LocateConfig* cfg);
 
+// The config of the second search of a region (retry_surface_cell_of_d): the whole top surface
+// matched on cells of that * D (at least ridge_cell_mm), probed on twice that; else as `cfg`.
+LocateConfig surface_retry_config(const LocateConfig& cfg, float tube_d_mm);
+
 // Whether any key of `user` follows the frame (its noise or pixel footprint): only then is the
 // frame's noise measured.
 bool derives_from_frame(const LocateConfig& user);
