@@ -363,6 +363,18 @@ TEST(Locator, ALoneHollowElbowIsPicked) {
   EXPECT_GE(within_5mm, 1);
 }
 
+// A pile of 25 thin short elbows (8.4 mm tube, 25 mm long, as 04-elbow of the zoo) under the
+// stereo sensor 0.63-0.73 m up, tilted up to 10 degrees.
+SimulatedScene thin_elbow_pile(const PipeModel& model, unsigned seed) {
+  std::mt19937 rng(seed);
+  SceneParams p;
+  p.pile.pipes = 25;
+  p.camera_height_min_mm = 630, p.camera_height_max_mm = 730;
+  p.max_tilt_deg = 10;
+  p.sensor = sensor_model("stereo");
+  return simulate_scene(model, p, rng);
+}
+
 // Beyond the paper: a short thin elbow's right ridge fits often lie just above R_th (its ridge is
 // a dozen cells, half of them near an end). Where no fit of a region is under R_th, those under
 // 1.5 R_th are judged by the image instead of being dropped: more of its top pipes are found,
@@ -373,13 +385,7 @@ TEST(Locator, AShortThinElbowJustAboveRthIsJudgedByTheImage) {
   hard.residual_rescue_of_rth = 1;  // the paper's cut
   int found_hard = 0, found = 0, top = 0, wrong_picks = 0;
   for (unsigned seed = 1; seed <= 12; ++seed) {
-    std::mt19937 rng(seed);
-    SceneParams p;
-    p.pile.pipes = 25;
-    p.camera_height_min_mm = 630, p.camera_height_max_mm = 730;
-    p.max_tilt_deg = 10;
-    p.sensor = sensor_model("stereo");
-    const SimulatedScene s = simulate_scene(model, p, rng);
+    const SimulatedScene s = thin_elbow_pile(model, seed);
     const std::vector<GtInfo> info = visibility_info(model, s);
     const auto top_found = [&](const LocateConfig& cfg) {
       Locator loc(model, cfg, s.camera.intrinsics);
@@ -417,13 +423,7 @@ TEST(Locator, ARegionTheRidgeFitsMissIsSearchedAgainOnItsSurface) {
   once.retry_surface_cell_of_d = 0;  // the ridge search alone
   int top = 0, found_once = 0, found = 0, lost = 0, wrong_picks = 0;
   for (unsigned seed = 1; seed <= 12; ++seed) {
-    std::mt19937 rng(seed);
-    SceneParams p;
-    p.pile.pipes = 25;
-    p.camera_height_min_mm = 630, p.camera_height_max_mm = 730;
-    p.max_tilt_deg = 10;
-    p.sensor = sensor_model("stereo");
-    const SimulatedScene s = simulate_scene(model, p, rng);
+    const SimulatedScene s = thin_elbow_pile(model, seed);
     const auto found_per_pipe = [&](const LocateConfig& cfg) {
       Locator loc(model, cfg, s.camera.intrinsics);
       const LocateOutput& out = loc.locate(s.depth_mm, s.camera);

@@ -317,6 +317,12 @@ void Locator::merge_estimate(int c) {
   out_.estimates.push_back(e);
 }
 
+CandidateContext Locator::context(const StartSet& starts, const LocateConfig& cfg, const Frame& f) const {
+  return CandidateContext{
+      model_,   lm_, starts, cfg, zb_, *f.depth, f.camera->intrinsics, f.bin_to_cam, out_.lowest_surface_z_mm,
+      out_.view};
+}
+
 CandidateInput Locator::candidate_input(int c) {
   CandidateInput in;
   in.index = c;
@@ -328,16 +334,7 @@ CandidateInput Locator::candidate_input(int c) {
 }
 
 void Locator::work_candidate(int c, Worker& wk, const Frame& f) {
-  const CandidateContext ctx{model_,
-                             lm_,
-                             starts_,
-                             cfg_,
-                             zb_,
-                             *f.depth,
-                             f.camera->intrinsics,
-                             f.bin_to_cam,
-                             out_.lowest_surface_z_mm,
-                             out_.view};
+  const CandidateContext ctx = context(starts_, cfg_, f);
   CandidateTrace& trace = out_.traces[std::size_t(c)];
   trace.ridge_begin = c * ridge_capacity_;
   if (pipeloc::work_candidate(ctx, candidate_input(c), Deadline{f.deadline_hard, cancel_}, &wk.buf, &trace,
@@ -360,16 +357,7 @@ void Locator::search_again(const Frame& f) {
 }
 
 void Locator::search_again(int c, Worker& wk, const Frame& f) {
-  const CandidateContext again{model_,
-                               lm_,
-                               retry_starts_,
-                               retry_cfg_,
-                               zb_,
-                               *f.depth,
-                               f.camera->intrinsics,
-                               f.bin_to_cam,
-                               out_.lowest_surface_z_mm,
-                               out_.view};
+  const CandidateContext again = context(retry_starts_, retry_cfg_, f);
   CandidateInput surface = candidate_input(c);
   Eigen::Vector3f* const ridge = surface.ridge;
   surface.ridge = wk.retry_ridge.data();  // the first search's ridge stays in the trace's place

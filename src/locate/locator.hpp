@@ -86,6 +86,8 @@ class Locator {
   };
   void regions_and_candidates(Handout& h, int task, int worker);
   void candidate_task(const Frame& f, int c, int worker);
+  // What a candidate's search reads of the frame, with its starts and config; its region.
+  CandidateContext context(const StartSet& starts, const LocateConfig& cfg, const Frame& f) const;
   CandidateInput candidate_input(int c);
   // The first search of candidate c; a region whose poses the image did not confirm is listed
   // for search_again().
