@@ -118,6 +118,20 @@ inline SimulatedScene pile_of(const PipeModel& model, int pipes, unsigned seed) 
   return simulate_scene(model, p, rng);
 }
 
+// A thin short elbow (8.4 mm tube, 25 mm long, as 04-elbow of the zoo) ...
+inline PipeModel thin_elbow() { return pipe_of("S6.8,B-45r16.4,S3.3", 8.4, "thin elbow"); }
+
+// ... and a pile of 25 of them under the stereo sensor 0.63-0.73 m up, tilted up to 10 degrees.
+inline SimulatedScene thin_elbow_pile(const PipeModel& model, unsigned seed) {
+  std::mt19937 rng(seed);
+  SceneParams p;
+  p.pile.pipes = 25;
+  p.camera_height_min_mm = 630, p.camera_height_max_mm = 730;
+  p.max_tilt_deg = 10;
+  p.sensor = sensor_model("stereo");
+  return simulate_scene(model, p, rng);
+}
+
 // A straight model lying with its long axis along the world direction yaw_deg (0: X), its middle
 // over (x, y) and its axis axis_z_mm above the floor.
 inline Pose lying_straight(const PipeModel& model, double yaw_deg, double x, double y, double axis_z_mm) {

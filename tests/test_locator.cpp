@@ -363,24 +363,12 @@ TEST(Locator, ALoneHollowElbowIsPicked) {
   EXPECT_GE(within_5mm, 1);
 }
 
-// A pile of 25 thin short elbows (8.4 mm tube, 25 mm long, as 04-elbow of the zoo) under the
-// stereo sensor 0.63-0.73 m up, tilted up to 10 degrees.
-SimulatedScene thin_elbow_pile(const PipeModel& model, unsigned seed) {
-  std::mt19937 rng(seed);
-  SceneParams p;
-  p.pile.pipes = 25;
-  p.camera_height_min_mm = 630, p.camera_height_max_mm = 730;
-  p.max_tilt_deg = 10;
-  p.sensor = sensor_model("stereo");
-  return simulate_scene(model, p, rng);
-}
-
 // Beyond the paper: a short thin elbow's right ridge fits often lie just above R_th (its ridge is
 // a dozen cells, half of them near an end). Where no fit of a region is under R_th, those under
 // 1.5 R_th are judged by the image instead of being dropped: more of its top pipes are found,
 // and no pose handed out is wrong.
 TEST(Locator, AShortThinElbowJustAboveRthIsJudgedByTheImage) {
-  const PipeModel model = pipe_of("S6.8,B-45r16.4,S3.3", 8.4, "short thin elbow");
+  const PipeModel model = thin_elbow();
   LocateConfig hard;
   hard.residual_rescue_of_rth = 1;  // the paper's cut
   int found_hard = 0, found = 0, top = 0, wrong_picks = 0;
@@ -417,7 +405,7 @@ TEST(Locator, AShortThinElbowJustAboveRthIsJudgedByTheImage) {
 // 8-20 points, and its fits end turned or flipped; the surface holds the region's shape. Piles of
 // 25 thin elbows (8.4 mm tube, 25 mm long, as 04-elbow of the zoo) under the stereo sensor.
 TEST(Locator, ARegionTheRidgeFitsMissIsSearchedAgainOnItsSurface) {
-  const PipeModel model = pipe_of("S6.8,B-45r16.4,S3.3", 8.4, "short thin elbow");
+  const PipeModel model = thin_elbow();
   const LocateConfig once;  // the ridge search alone (the default)
   LocateConfig again;
   again.retry_surface_cell_of_d = 0.25;

@@ -92,19 +92,13 @@ std::vector<int> regions_per_pipe(const PipeModel& model, const LocateConfig& cf
 // only. Kept where a majority tilts away (convexity_min_share 0.5), more of the top pipes get a
 // candidate region than where 0.6 had to. Measured: 68 of 68 top pipes, 65 with 0.6.
 TEST(Segmentation, AThinElbowsNoisyTopIsConvex) {
-  const PipeModel model = pipe_of("S6.8,B-45r16.4,S3.3", 8.4, "thin elbow");
+  const PipeModel model = thin_elbow();
   LocateConfig strict;
   strict.convexity_min_share = 0.6;  // the bound before
   const LocateConfig cfg;
   int tops = 0, with_strict = 0, with_default = 0, lost = 0;
   for (unsigned seed = 1; seed <= 3; ++seed) {
-    std::mt19937 rng(seed);
-    SceneParams p;
-    p.pile.pipes = 25;
-    p.sensor = sensor_model("stereo");
-    p.camera_height_min_mm = 630, p.camera_height_max_mm = 730;
-    p.max_tilt_deg = 10;
-    const SimulatedScene s = simulate_scene(model, p, rng);
+    const SimulatedScene s = thin_elbow_pile(model, seed);
     const std::vector<int> a = regions_per_pipe(model, strict, s), b = regions_per_pipe(model, cfg, s);
     for (std::size_t g = 0; g < a.size(); ++g) {
       if (!s.info[g].top) continue;

@@ -73,7 +73,7 @@ const LocateOutput& Locator::locate(const Image<float>& frame_depth, const Camer
   if (derives_from_frame(user_cfg_)) {
     out_.noise = measure_depth_noise(frame_depth, &noise_histograms_);
     set_frame_thresholds(user_cfg_, model_.tube_diameter_mm, out_.noise, camera.intrinsics, &cfg_);
-    retry_cfg_ = surface_retry_config(cfg_, model_.tube_diameter_mm);
+    if (retry_on_surface_) retry_cfg_ = surface_retry_config(cfg_, model_.tube_diameter_mm);
   }
   // Anytime: what is not expected to finish before the deadline is not started. The expected
   // durations are running averages of earlier cycles (none yet: everything is tried).
