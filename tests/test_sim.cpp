@@ -271,5 +271,42 @@ TEST(Simulator, BinGrowsWithThePipeSoThatAPileOf50Fits) {
   EXPECT_EQ(int(build_pile(model, pile, rng).size()), 50);
 }
 
+// Where a cell's sensor would be mounted for a bin: every camera drawn from the raised heights
+// (any tilt up to the most, any azimuth and offset) sees the four inner corners of the rim.
+TEST(Simulator, ACameraRaisedToSeeTheBinSeesItsWholeRim) {
+  SceneParams params;
+  // The paper's bin from the default heights is seen whole already: nothing to raise.
+  EXPECT_EQ(lowest_camera_seeing_bin(params), params.camera_height_min_mm);
+  // A bin grown for 50 long U's, a camera drawn 0.5-0.6 m up, tilted up to 20 degrees: raised.
+  PipeSpec spec;
+  spec.diameter_mm = 30;
+  spec.sides = 12;
+  spec.bend_step_deg = 15;
+  spec.segments = parse_centreline("S300,B180r60,S200");
+  params.pile.pipes = 50;
+  params.pile.bin = bin_for_pile(derive_pipe_model(make_pipe(spec), "long-u"), params.pile);
+  params.camera_height_min_mm = 500, params.camera_height_max_mm = 600, params.max_tilt_deg = 20;
+  const double lowest = lowest_camera_seeing_bin(params);
+  EXPECT_GT(lowest, 1000);
+  params.camera_height_max_mm += lowest - params.camera_height_min_mm;
+  params.camera_height_min_mm = lowest;
+  std::mt19937 rng(3);
+  const Intrinsics& k = params.intrinsics;
+  const BinSpec& bin = params.pile.bin;
+  for (int i = 0; i < 500; ++i) {
+    const Pose world_to_cam = draw_camera(params, rng);
+    for (double sx : {-0.5, 0.5})
+      for (double sy : {-0.5, 0.5}) {
+        const Eigen::Vector2d px = k.project(
+            world_to_cam * Eigen::Vector3d(sx * bin.inner_x_mm, sy * bin.inner_y_mm, bin.wall_height_mm));
+        EXPECT_TRUE(px.x() >= 0 && px.y() >= 0 && px.x() <= k.width - 1 && px.y() <= k.height - 1)
+            << "camera " << i << " misses the rim corner (" << sx << ", " << sy << "): " << px.transpose();
+      }
+  }
+  // ... and 50 mm lower, a camera at the least height sees the rim no more at some tilt.
+  params.camera_height_min_mm = params.camera_height_max_mm = lowest - 50;
+  EXPECT_GT(lowest_camera_seeing_bin(params), params.camera_height_min_mm);
+}
+
 }  // namespace
 }  // namespace pipeloc

@@ -304,6 +304,7 @@ void read_source(const std::string& file, const toml::table* t, std::vector<std:
   sim.real("tilt_deg", &c->sim.tilt_deg, 0, 45, "deg");
   sim.real("camera_height_min_mm", &c->sim.camera_height_min_mm, 200, 3000, "mm");
   sim.real("camera_height_max_mm", &c->sim.camera_height_max_mm, 200, 3000, "mm");
+  sim.boolean("camera_sees_bin", &c->sim.camera_sees_bin);
   sim.text("sensor", &c->sim.sensor, {"kinect", "stereo"});
   sim.boolean("refill", &c->sim.refill);
   sim.integer("refill_after_frames_without_pick", &c->sim.refill_after_frames_without_pick, 0, 1000000,

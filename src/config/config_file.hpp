@@ -29,6 +29,7 @@ struct SimSourceConfig {
   int seed = 1;
   double tilt_deg = 0;  // camera tilt from vertical, drawn in [0, this] per bin
   double camera_height_min_mm = 980, camera_height_max_mm = 1080;  // above the bin floor, drawn per bin
+  bool camera_sees_bin = false;   // both raised alike, if needed, until every camera drawn sees the bin's rim
   std::string sensor = "kinect";  // kinect (structured light) | stereo (active stereo, RealSense D4xx)
   bool refill = true;             // a new bin when the last pipe has been picked
   int refill_after_frames_without_pick = 0;  // ... or after this many frames in a row without one (0: never)

@@ -9,6 +9,9 @@ namespace pipeloc {
 namespace {
 // A pick takes the pipe the pose was computed for when it is within the scorer's looser bound.
 constexpr double kPickMatchMm = 10.0;
+
+// The camera's height above the bin floor (the world's z of its centre).
+double camera_height_mm(const Pose& world_to_cam) { return world_to_cam.inverse().translation().z(); }
 }  // namespace
 
 SimSource::SimSource(const PipeModel& model, const SimSourceConfig& cfg)
@@ -19,6 +22,11 @@ SimSource::SimSource(const PipeModel& model, const SimSourceConfig& cfg)
   params_.camera_height_max_mm = cfg.camera_height_max_mm;
   params_.sensor = sensor_model(cfg.sensor);
   params_.pile.bin = bin_for_pile(model, params_.pile);
+  // A bin grown for a big pile may reach beyond the view: mounted where it sees the whole bin.
+  if (cfg.camera_sees_bin) {
+    const double raise = lowest_camera_seeing_bin(params_) - params_.camera_height_min_mm;
+    params_.camera_height_min_mm += raise, params_.camera_height_max_mm += raise;
+  }
   for (std::size_t i = 0; i < model.mesh.vertices.size(); i += 4)
     vertices_.push_back(model.mesh.vertices[i].cast<double>());
   // The tube's axis from every vertex: a subset need not be centred on it.
@@ -35,14 +43,30 @@ SimSource::~SimSource() {
 }
 
 void SimSource::write_truth(std::uint64_t frame) {
-  // {"frame": N, "model_to_cam": [[R row-major (9), t mm (3)], ...]}; fprintf allocates nothing.
-  std::fprintf(truth_, "{\"frame\":%llu,\"bin\":%d,\"model_to_cam\":[", (unsigned long long)frame, bins_);
+  // {"frame": N, "bin": B, "camera_height_mm": H, "model_to_cam": [[R row-major (9), t mm (3)], ...],
+  //  "in_view": [share of each pipe's vertices inside the image, ...]}; fprintf allocates nothing.
+  std::fprintf(truth_, "{\"frame\":%llu,\"bin\":%d,\"camera_height_mm\":%.1f,\"model_to_cam\":[",
+               (unsigned long long)frame, bins_, camera_height_mm(world_to_cam_));
   for (std::size_t i = 0; i < pile_.size(); ++i) {
     const Pose p = world_to_cam_ * pile_[i];
     std::fprintf(truth_, "%s[", i ? "," : "");
     for (int r = 0; r < 3; ++r)
       for (int c = 0; c < 3; ++c) std::fprintf(truth_, "%.9f,", p.linear()(r, c));
     std::fprintf(truth_, "%.4f,%.4f,%.4f]", p.translation().x(), p.translation().y(), p.translation().z());
+  }
+  std::fprintf(truth_, "],\"in_view\":[");
+  const Intrinsics& k = params_.intrinsics;
+  for (std::size_t i = 0; i < pile_.size(); ++i) {
+    const Pose p = world_to_cam_ * pile_[i];
+    int inside = 0;
+    for (const Eigen::Vector3d& v : vertices_) {
+      const Eigen::Vector3d c = p * v;
+      if (c.z() <= 0) continue;
+      const Eigen::Vector2d px = k.project(c);
+      inside += px.x() >= 0 && px.y() >= 0 && px.x() <= k.width - 1 && px.y() <= k.height - 1;
+    }
+    std::fprintf(truth_, "%s%.3f", i ? "," : "",
+                 vertices_.empty() ? 0.0 : double(inside) / double(vertices_.size()));
   }
   std::fprintf(truth_, "]}\n");
   std::fflush(truth_);
@@ -112,11 +136,12 @@ std::string SimSource::describe() const {
   char text[512];
   std::snprintf(
       text, sizeof text,
-      "sim: %d pipes of %s per bin (%.0f x %.0f mm), seed %d, %s sensor %.0f-%.0f mm above the floor, "
+      "sim: %d pipes of %s per bin (%.0f x %.0f mm), seed %d, %s sensor %.0f-%.0f mm above the floor%s, "
       "tilt up to %.1f deg, %dx%d, %s",
       cfg_.pipes, model_.source.c_str(), params_.pile.bin.inner_x_mm, params_.pile.bin.inner_y_mm, cfg_.seed,
-      cfg_.sensor.c_str(), cfg_.camera_height_min_mm, cfg_.camera_height_max_mm, cfg_.tilt_deg,
-      params_.intrinsics.width, params_.intrinsics.height,
+      cfg_.sensor.c_str(), params_.camera_height_min_mm, params_.camera_height_max_mm,
+      params_.camera_height_min_mm > cfg_.camera_height_min_mm ? " (raised to see the whole bin)" : "",
+      cfg_.tilt_deg, params_.intrinsics.width, params_.intrinsics.height,
       cfg_.refill ? "refilled when empty" : "not refilled");
   return text;
 }

@@ -10,18 +10,11 @@ constexpr double kDeg = M_PI / 180.0;
 }  // namespace
 
 // Camera above the bin looking down at its centre, tilted by `tilt_deg` towards `azimuth`.
-Pose draw_camera(const SceneParams& p, std::mt19937& rng) {
-  std::uniform_real_distribution<double> uniform(0.0, 1.0);
-  const double height =
-      p.camera_height_min_mm + uniform(rng) * (p.camera_height_max_mm - p.camera_height_min_mm);
-  const double tilt = uniform(rng) * p.max_tilt_deg * kDeg;
-  const double azimuth = uniform(rng) * 2 * M_PI;
-  const Eigen::Vector3d look_at((uniform(rng) - 0.5) * 2 * p.camera_offset_mm,
-                                (uniform(rng) - 0.5) * 2 * p.camera_offset_mm, 0);
+Pose camera_pose(double height_mm, double tilt_rad, double azimuth_rad, const Eigen::Vector3d& look_at) {
   // Camera axes in the world: z looks down (tilted), x along world x as far as possible.
-  const Eigen::Vector3d down(std::sin(tilt) * std::cos(azimuth), std::sin(tilt) * std::sin(azimuth),
-                             -std::cos(tilt));
-  const Eigen::Vector3d centre = look_at - down * (height / std::cos(tilt));
+  const Eigen::Vector3d down(std::sin(tilt_rad) * std::cos(azimuth_rad),
+                             std::sin(tilt_rad) * std::sin(azimuth_rad), -std::cos(tilt_rad));
+  const Eigen::Vector3d centre = look_at - down * (height_mm / std::cos(tilt_rad));
   Eigen::Vector3d x_axis = Eigen::Vector3d::UnitX() - down * down.x();
   x_axis.normalize();
   const Eigen::Vector3d y_axis = down.cross(x_axis);
@@ -33,6 +26,47 @@ Pose draw_camera(const SceneParams& p, std::mt19937& rng) {
   world_to_cam.linear() = cam_to_world.transpose();
   world_to_cam.translation() = -cam_to_world.transpose() * centre;
   return world_to_cam;
+}
+
+Pose draw_camera(const SceneParams& p, std::mt19937& rng) {
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  const double height =
+      p.camera_height_min_mm + uniform(rng) * (p.camera_height_max_mm - p.camera_height_min_mm);
+  const double tilt = uniform(rng) * p.max_tilt_deg * kDeg;
+  const double azimuth = uniform(rng) * 2 * M_PI;
+  const Eigen::Vector3d look_at((uniform(rng) - 0.5) * 2 * p.camera_offset_mm,
+                                (uniform(rng) - 0.5) * 2 * p.camera_offset_mm, 0);
+  return camera_pose(height, tilt, azimuth, look_at);
+}
+
+double lowest_camera_seeing_bin(const SceneParams& p) {
+  const BinSpec& bin = p.pile.bin;
+  const Intrinsics& k = p.intrinsics;
+  const double hx = bin.inner_x_mm / 2, hy = bin.inner_y_mm / 2, o = p.camera_offset_mm;
+  // Every camera draw_camera may draw at this height: tilts and azimuths in steps, the look-at
+  // point at the centre and at the corners of its square; each sees the rim's four inner corners.
+  const auto sees_rim = [&](double height) {
+    for (double tilt_share : {0.0, 0.5, 1.0})
+      for (int a = 0; a < 24; ++a)
+        for (const Eigen::Vector2d& at :
+             {Eigen::Vector2d(0, 0), Eigen::Vector2d(o, o), Eigen::Vector2d(o, -o), Eigen::Vector2d(-o, o),
+              Eigen::Vector2d(-o, -o)}) {
+          const Pose world_to_cam =
+              camera_pose(height, tilt_share * p.max_tilt_deg * kDeg, a * M_PI / 12, {at.x(), at.y(), 0});
+          for (double sx : {-1.0, 1.0})
+            for (double sy : {-1.0, 1.0}) {
+              const Eigen::Vector3d c = world_to_cam * Eigen::Vector3d(sx * hx, sy * hy, bin.wall_height_mm);
+              if (c.z() <= 0) return false;
+              const Eigen::Vector2d px = k.project(c);
+              if (px.x() < 0 || px.y() < 0 || px.x() > k.width - 1 || px.y() > k.height - 1) return false;
+            }
+        }
+    return true;
+  };
+  constexpr double kStepMm = 10, kHighestMm = 5000;
+  double height = p.camera_height_min_mm;
+  while (!sees_rim(height) && height < kHighestMm) height += kStepMm;
+  return height;
 }
 
 namespace {

@@ -29,8 +29,17 @@ struct SimulatedScene {
   Pose model_to_cam(std::size_t i) const { return *camera.world_to_cam * model_to_world[i]; }
 };
 
+// A camera height_mm above the bin floor, tilted from vertical towards the azimuth, looking down at
+// look_at on the floor (world_to_cam); its x axis along the world's x as far as possible.
+Pose camera_pose(double height_mm, double tilt_rad, double azimuth_rad, const Eigen::Vector3d& look_at);
+
 // A camera above the bin looking down at its centre (world_to_cam), within params' ranges.
 Pose draw_camera(const SceneParams& params, std::mt19937& rng);
+
+// The lowest camera height, at least params' least, from which every camera draw_camera may draw
+// (any tilt up to the most, any azimuth, any offset) sees the bin's whole rim, and so all of the
+// bin inside it: where an integrator would mount the sensor for this bin. (At most 5 m.)
+double lowest_camera_seeing_bin(const SceneParams& params);
 
 // Clean renders of bin and pipes from the camera and from the projector beside it (labels:
 // pipe i = i, the bin = the number of pipes).

@@ -27,9 +27,17 @@ for r in z["rows"]:
     assert 0 <= s["wrong_picks"] <= s["picks"] <= 2, s
     assert c["bins"] == 2 and c["pipes"] == 2 * r["pipes"], c  # each bin held the pile asked for
     assert 0 <= c["taken"] <= c["pipes"] and c["locates"] >= 1, c
+    assert 0 <= c["seen_taken"] <= min(c["seen"], c["taken"]) and c["seen"] <= c["pipes"], c  # clearance in view
+    assert abs(c["height_mm"] - r["height_mm"]) <= 50, c  # the shape's camera (--clear-camera drawn)
     assert c["stop"] in ("done_none", "limit"), c
     assert c["locates"] >= c["taken"] + 1 or c["stop"] == "limit", c  # each pipe taken by a pick, then DONE_NONE
 PY
+grep -qE ' seen +clear ' "$work/zoo.txt" || fail "no seen/clear columns: $(head -12 "$work/zoo.txt")"
+grep -q '^clearing: ' "$work/zoo.txt" || fail "no clearing line: $(tail -8 "$work/zoo.txt")"
+# The camera mounted to see the whole bin while clearing: passed to the sim source.
+"$here/tools/zoo" --bin "$bin" --out "$work/zoo" --shapes 20 --images 2 --reuse --clear-camera bin \
+  > "$work/zoo6.txt" 2>&1 || fail "--clear-camera bin failed: $(tail -20 "$work/zoo6.txt")"
+grep -q 'camera_sees_bin = true' "$work/zoo/shapes/20-3D/clear.toml" || fail "--clear-camera bin: not passed to serve"
 # A second run on the same folder re-uses the STLs and datasets.
 "$here/tools/zoo" --bin "$bin" --out "$work/zoo" --shapes 15 --images 2 --reuse --no-clear > "$work/zoo2.txt" 2>&1 ||
   fail "--reuse run failed: $(tail -20 "$work/zoo2.txt")"
