@@ -272,7 +272,8 @@ TEST(Simulator, BinGrowsWithThePipeSoThatAPileOf50Fits) {
 }
 
 // Where a cell's sensor would be mounted for a bin: every camera drawn from the raised heights
-// (any tilt up to the most, any azimuth and offset) sees the four inner corners of the rim.
+// (any tilt up to the most, any azimuth and offset) sees the four inner corners of the rim, and
+// so does its projector.
 TEST(Simulator, ACameraRaisedToSeeTheBinSeesItsWholeRim) {
   SceneParams params;
   // The paper's bin from the default heights is seen whole already: nothing to raise.
@@ -296,12 +297,13 @@ TEST(Simulator, ACameraRaisedToSeeTheBinSeesItsWholeRim) {
   for (int i = 0; i < 500; ++i) {
     const Pose world_to_cam = draw_camera(params, rng);
     for (double sx : {-0.5, 0.5})
-      for (double sy : {-0.5, 0.5}) {
-        const Eigen::Vector2d px = k.project(
-            world_to_cam * Eigen::Vector3d(sx * bin.inner_x_mm, sy * bin.inner_y_mm, bin.wall_height_mm));
-        EXPECT_TRUE(px.x() >= 0 && px.y() >= 0 && px.x() <= k.width - 1 && px.y() <= k.height - 1)
-            << "camera " << i << " misses the rim corner (" << sx << ", " << sy << "): " << px.transpose();
-      }
+      for (double sy : {-0.5, 0.5})
+        for (double beside : {0.0, params.sensor.baseline_mm}) {  // the camera, the projector
+          const Eigen::Vector3d corner(sx * bin.inner_x_mm, sy * bin.inner_y_mm, bin.wall_height_mm);
+          const Eigen::Vector2d px = k.project(world_to_cam * corner - Eigen::Vector3d(beside, 0, 0));
+          EXPECT_TRUE(px.x() >= 0 && px.y() >= 0 && px.x() <= k.width - 1 && px.y() <= k.height - 1)
+              << "camera " << i << " misses the rim corner (" << sx << ", " << sy << "): " << px.transpose();
+        }
   }
   // ... and 50 mm lower, a camera at the least height sees the rim no more at some tilt.
   params.camera_height_min_mm = params.camera_height_max_mm = lowest - 50;

@@ -44,7 +44,7 @@ SimSource::~SimSource() {
 
 void SimSource::write_truth(std::uint64_t frame) {
   // {"frame": N, "bin": B, "camera_height_mm": H, "model_to_cam": [[R row-major (9), t mm (3)], ...],
-  //  "in_view": [share of each pipe's vertices inside the image, ...]}; fprintf allocates nothing.
+  //  "in_view": [share of each pipe's vertices in the sensor's view, ...]}; fprintf allocates nothing.
   std::fprintf(truth_, "{\"frame\":%llu,\"bin\":%d,\"camera_height_mm\":%.1f,\"model_to_cam\":[",
                (unsigned long long)frame, bins_, camera_height_mm(world_to_cam_));
   for (std::size_t i = 0; i < pile_.size(); ++i) {
@@ -54,16 +54,22 @@ void SimSource::write_truth(std::uint64_t frame) {
       for (int c = 0; c < 3; ++c) std::fprintf(truth_, "%.9f,", p.linear()(r, c));
     std::fprintf(truth_, "%.4f,%.4f,%.4f]", p.translation().x(), p.translation().y(), p.translation().z());
   }
+  // In view: where the sensor could read it, were nothing in front: in its range, inside the
+  // camera's image and the projector's (or the second camera's), which lies baseline_mm along +x.
   std::fprintf(truth_, "],\"in_view\":[");
   const Intrinsics& k = params_.intrinsics;
+  const SensorModel& sensor = params_.sensor;
+  const auto in_image = [&](const Eigen::Vector3d& c) {
+    const Eigen::Vector2d px = k.project(c);
+    return px.x() >= 0 && px.y() >= 0 && px.x() <= k.width - 1 && px.y() <= k.height - 1;
+  };
   for (std::size_t i = 0; i < pile_.size(); ++i) {
     const Pose p = world_to_cam_ * pile_[i];
     int inside = 0;
     for (const Eigen::Vector3d& v : vertices_) {
       const Eigen::Vector3d c = p * v;
-      if (c.z() <= 0) continue;
-      const Eigen::Vector2d px = k.project(c);
-      inside += px.x() >= 0 && px.y() >= 0 && px.x() <= k.width - 1 && px.y() <= k.height - 1;
+      if (c.z() < sensor.min_range_mm || c.z() > sensor.max_range_mm) continue;
+      inside += in_image(c) && in_image(c - Eigen::Vector3d(sensor.baseline_mm, 0, 0));
     }
     std::fprintf(truth_, "%s%.3f", i ? "," : "",
                  vertices_.empty() ? 0.0 : double(inside) / double(vertices_.size()));

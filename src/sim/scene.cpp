@@ -44,7 +44,8 @@ double lowest_camera_seeing_bin(const SceneParams& p) {
   const Intrinsics& k = p.intrinsics;
   const double hx = bin.inner_x_mm / 2, hy = bin.inner_y_mm / 2, o = p.camera_offset_mm;
   // Every camera draw_camera may draw at this height: tilts and azimuths in steps, the look-at
-  // point at the centre and at the corners of its square; each sees the rim's four inner corners.
+  // point at the centre and at the corners of its square; each sees the rim's four inner corners
+  // (the sensor reads where both its camera and its projector see).
   const auto sees_rim = [&](double height) {
     for (double tilt_share : {0.0, 0.5, 1.0})
       for (int a = 0; a < 24; ++a)
@@ -57,8 +58,12 @@ double lowest_camera_seeing_bin(const SceneParams& p) {
             for (double sy : {-1.0, 1.0}) {
               const Eigen::Vector3d c = world_to_cam * Eigen::Vector3d(sx * hx, sy * hy, bin.wall_height_mm);
               if (c.z() <= 0) return false;
-              const Eigen::Vector2d px = k.project(c);
-              if (px.x() < 0 || px.y() < 0 || px.x() > k.width - 1 || px.y() > k.height - 1) return false;
+              // ... in the camera's image and the projector's (or second camera's) beside it.
+              for (const Eigen::Vector3d& in :
+                   {c, Eigen::Vector3d(c - Eigen::Vector3d(p.sensor.baseline_mm, 0, 0))}) {
+                const Eigen::Vector2d px = k.project(in);
+                if (px.x() < 0 || px.y() < 0 || px.x() > k.width - 1 || px.y() > k.height - 1) return false;
+              }
             }
         }
     return true;

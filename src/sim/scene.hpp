@@ -38,7 +38,8 @@ Pose draw_camera(const SceneParams& params, std::mt19937& rng);
 
 // The lowest camera height, at least params' least, from which every camera draw_camera may draw
 // (any tilt up to the most, any azimuth, any offset) sees the bin's whole rim, and so all of the
-// bin inside it: where an integrator would mount the sensor for this bin. (At most 5 m.)
+// bin inside it, with its camera and its projector: where an integrator would mount the sensor for
+// this bin. (At most 5 m.)
 double lowest_camera_seeing_bin(const SceneParams& params);
 
 // Clean renders of bin and pipes from the camera and from the projector beside it (labels:
