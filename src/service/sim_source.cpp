@@ -54,22 +54,17 @@ void SimSource::write_truth(std::uint64_t frame) {
       for (int c = 0; c < 3; ++c) std::fprintf(truth_, "%.9f,", p.linear()(r, c));
     std::fprintf(truth_, "%.4f,%.4f,%.4f]", p.translation().x(), p.translation().y(), p.translation().z());
   }
-  // In view: where the sensor could read it, were nothing in front: in its range, inside the
-  // camera's image and the projector's (or the second camera's), which lies baseline_mm along +x.
+  // In view: where the sensor could read it, were nothing in front: in its range, seen by its
+  // camera and its projector.
   std::fprintf(truth_, "],\"in_view\":[");
-  const Intrinsics& k = params_.intrinsics;
   const SensorModel& sensor = params_.sensor;
-  const auto in_image = [&](const Eigen::Vector3d& c) {
-    const Eigen::Vector2d px = k.project(c);
-    return px.x() >= 0 && px.y() >= 0 && px.x() <= k.width - 1 && px.y() <= k.height - 1;
-  };
   for (std::size_t i = 0; i < pile_.size(); ++i) {
     const Pose p = world_to_cam_ * pile_[i];
     int inside = 0;
     for (const Eigen::Vector3d& v : vertices_) {
       const Eigen::Vector3d c = p * v;
-      if (c.z() < sensor.min_range_mm || c.z() > sensor.max_range_mm) continue;
-      inside += in_image(c) && in_image(c - Eigen::Vector3d(sensor.baseline_mm, 0, 0));
+      inside += c.z() >= sensor.min_range_mm && c.z() <= sensor.max_range_mm &&
+                camera_and_projector_see(params_, c);
     }
     std::fprintf(truth_, "%s%.3f", i ? "," : "",
                  vertices_.empty() ? 0.0 : double(inside) / double(vertices_.size()));

@@ -39,13 +39,23 @@ Pose draw_camera(const SceneParams& p, std::mt19937& rng) {
   return camera_pose(height, tilt, azimuth, look_at);
 }
 
+bool camera_and_projector_see(const SceneParams& p, const Eigen::Vector3d& p_cam) {
+  if (p_cam.z() <= 0) return false;
+  const Intrinsics& k = p.intrinsics;
+  for (const Eigen::Vector3d& in :
+       {p_cam, Eigen::Vector3d(p_cam - Eigen::Vector3d(p.sensor.baseline_mm, 0, 0))}) {
+    const Eigen::Vector2d px = k.project(in);
+    if (px.x() < 0 || px.y() < 0 || px.x() > k.width - 1 || px.y() > k.height - 1) return false;
+  }
+  return true;
+}
+
 double lowest_camera_seeing_bin(const SceneParams& p) {
   const BinSpec& bin = p.pile.bin;
-  const Intrinsics& k = p.intrinsics;
   const double hx = bin.inner_x_mm / 2, hy = bin.inner_y_mm / 2, o = p.camera_offset_mm;
   // Every camera draw_camera may draw at this height: tilts and azimuths in steps, the look-at
   // point at the centre and at the corners of its square; each sees the rim's four inner corners
-  // (the sensor reads where both its camera and its projector see).
+  // with its camera and its projector.
   const auto sees_rim = [&](double height) {
     for (double tilt_share : {0.0, 0.5, 1.0})
       for (int a = 0; a < 24; ++a)
@@ -56,14 +66,9 @@ double lowest_camera_seeing_bin(const SceneParams& p) {
               camera_pose(height, tilt_share * p.max_tilt_deg * kDeg, a * M_PI / 12, {at.x(), at.y(), 0});
           for (double sx : {-1.0, 1.0})
             for (double sy : {-1.0, 1.0}) {
-              const Eigen::Vector3d c = world_to_cam * Eigen::Vector3d(sx * hx, sy * hy, bin.wall_height_mm);
-              if (c.z() <= 0) return false;
-              // ... in the camera's image and the projector's (or second camera's) beside it.
-              for (const Eigen::Vector3d& in :
-                   {c, Eigen::Vector3d(c - Eigen::Vector3d(p.sensor.baseline_mm, 0, 0))}) {
-                const Eigen::Vector2d px = k.project(in);
-                if (px.x() < 0 || px.y() < 0 || px.x() > k.width - 1 || px.y() > k.height - 1) return false;
-              }
+              if (!camera_and_projector_see(
+                      p, world_to_cam * Eigen::Vector3d(sx * hx, sy * hy, bin.wall_height_mm)))
+                return false;
             }
         }
     return true;

@@ -36,6 +36,11 @@ Pose camera_pose(double height_mm, double tilt_rad, double azimuth_rad, const Ei
 // A camera above the bin looking down at its centre (world_to_cam), within params' ranges.
 Pose draw_camera(const SceneParams& params, std::mt19937& rng);
 
+// Whether a point in front of the camera (camera frame, mm) falls inside both the camera's image
+// and its projector's (or second camera's), which lies sensor.baseline_mm along +x: the sensor
+// reads only there, were nothing in front.
+bool camera_and_projector_see(const SceneParams& params, const Eigen::Vector3d& p_cam);
+
 // The lowest camera height, at least params' least, from which every camera draw_camera may draw
 // (any tilt up to the most, any azimuth, any offset) sees the bin's whole rim, and so all of the
 // bin inside it, with its camera and its projector: where an integrator would mount the sensor for
