@@ -78,6 +78,63 @@ TEST(PointColumns, NearestBothWaysIsNearestFromEachSide) {
   }
 }
 
+// Within a radius: up to it the same partner at the same distance as the scan of all pairs, beyond
+// it -1 and 1e30. Sets of 0 to 300 points on a coarse lattice (ties common) spread along a line as a
+// ridge is, radii from a tenth of a step to past the set's extent (slabs of a few points to all of
+// them); a point far outside the set and a point that is not a number included.
+TEST(PointColumns, NearestBothWaysWithinIsNearestBothWaysUpToTheRadius) {
+  std::mt19937 rng(5);
+  std::uniform_int_distribution<int> across(-2, 2);
+  const auto draw = [&](int n, float step) {
+    std::vector<Eigen::Vector3f> pts;
+    for (int k = 0; k < n; ++k)
+      pts.emplace_back(step * float(k / 3 + across(rng)), step * float(across(rng)),
+                       0.5f * step * float(across(rng)));
+    return pts;
+  };
+  const float radii[] = {0.1f, 1.0f, 2.0f, 2.5f, 7.0f, 1e3f};
+  PointColumns b_columns, all_pairs;
+  b_columns.reserve(300);
+  all_pairs.reserve(300);
+  std::vector<int> a_to(300), b_to(300), a_want(300), b_want(300);
+  std::vector<float> a_d2(300), b_d2(300), a_want_d2(300), b_want_d2(300);
+  int within = 0, beyond = 0;
+  for (int trial = 0; trial < 240; ++trial) {
+    const int na = (trial * 37) % 301, nb = (trial * 53) % 301;
+    const float step = trial % 2 ? 1.0f : 3.7f;
+    std::vector<Eigen::Vector3f> a = draw(na, step);
+    std::vector<Eigen::Vector3f> b = draw(nb, step);
+    if (na > 1) a[1] = Eigen::Vector3f(1e9f, 0, 0);          // far beyond the set
+    if (nb > 2 && trial % 3 == 0) b[2].x() = std::nanf("");  // never anyone's partner, and none of its own
+    ASSERT_TRUE(b_columns.assign(b.data(), nb));
+    ASSERT_TRUE(all_pairs.assign(b.data(), nb));
+    const float radius = step * radii[trial % 6];
+    b_columns.nearest_both_ways_within(a.data(), na, radius, a_to.data(), a_d2.data(), b_to.data(),
+                                       b_d2.data());
+    all_pairs.nearest_both_ways(a.data(), na, a_want.data(), a_want_d2.data(), b_want.data(),
+                                b_want_d2.data());
+    const auto expect_same = [&](int got, float got_d2, int want, float want_d2, const char* side, int k) {
+      if (want >= 0 && want_d2 <= radius * radius) {
+        ++within;
+        EXPECT_EQ(got, want) << side << k << " trial " << trial;
+        EXPECT_EQ(got_d2, want_d2) << side << k << " trial " << trial;
+      } else {
+        ++beyond;
+        EXPECT_EQ(got, -1) << side << k << " trial " << trial;
+        EXPECT_EQ(got_d2, 1e30f) << side << k << " trial " << trial;
+      }
+    };
+    for (int i = 0; i < na; ++i)
+      expect_same(a_to[std::size_t(i)], a_d2[std::size_t(i)], a_want[std::size_t(i)],
+                  a_want_d2[std::size_t(i)], "a", i);
+    for (int j = 0; j < nb; ++j)
+      expect_same(b_to[std::size_t(j)], b_d2[std::size_t(j)], b_want[std::size_t(j)],
+                  b_want_d2[std::size_t(j)], "b", j);
+  }
+  EXPECT_GT(within, 10000);
+  EXPECT_GT(beyond, 1000);
+}
+
 // A bound only cuts short what lies beyond it: up to the bound the distance is the exact one, and
 // beyond it the value returned lies beyond it too (models with and without symmetries).
 TEST(PoseDistance, ExactUpToTheBoundAndBeyondItPastIt) {

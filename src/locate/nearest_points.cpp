@@ -3,9 +3,24 @@
 #include <emmintrin.h>
 
 #include <algorithm>
+#include <climits>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
 
 namespace pipeloc {
 namespace {
+
+constexpr float kFar = 1e30f;  // "no partner" distance
+// The slab scanned reaches this much beyond the radius, so that a partner within it is never
+// outside the slab by the rounding of a coordinate.
+constexpr float kSlabMargin = 1.01f;
+// Slabs wider than this share of the set's extent hold most of it: the bookkeeping of slabs
+// costs more than it spares, and all pairs are scanned (compact sets such as a coil's ridge, the
+// wide gates of the first iterations).
+constexpr float kSlabOfExtent = 0.5f;
+// Fewer pairs than this are scanned sooner than the set is sorted.
+constexpr int kMinPairsForSlabs = 128 * 128;
 
 // Squared distances from q to points j..j+3 of the columns, summed as the one-at-a-time tail sums
 // them ((p - q)^2 equals (q - p)^2 exactly, so either side's search gets the same floats).
@@ -36,6 +51,16 @@ inline float first_least_of_lanes(__m128 low4, __m128i at4, int* best) {
     if (lanes[l] < low || (lanes[l] == low && lane_at[l] >= 0 && lane_at[l] < *best))
       low = lanes[l], *best = lane_at[l];
   return low;
+}
+
+// Per lane, the least distance so far and the least index at it: the points come in an order other
+// than their indices', so an equal distance takes the lower index.
+inline void keep_lowest_least(__m128 d, __m128i index4, __m128* low4, __m128i* at4) {
+  const __m128i take =
+      _mm_or_si128(_mm_castps_si128(_mm_cmplt_ps(d, *low4)),
+                   _mm_and_si128(_mm_castps_si128(_mm_cmpeq_ps(d, *low4)), _mm_cmplt_epi32(index4, *at4)));
+  *low4 = _mm_min_ps(d, *low4);
+  *at4 = _mm_or_si128(_mm_and_si128(take, index4), _mm_andnot_si128(take, *at4));
 }
 
 }  // namespace
@@ -100,19 +125,119 @@ void PointColumns::nearest_both_ways(const Eigen::Vector3f* a, int na, int* a_to
   // (b_to[j] stays -1 unless some a[i] came strictly under 1e30: no clean-up needed)
 }
 
+// For each a[i], the slab of the sorted points whose coordinate along the longest side lies within
+// the radius of a[i]'s (every partner within the radius lies in it), scanned four at a time as
+// nearest_both_ways() scans all: the same distances, the same partners up to the radius.
+void PointColumns::nearest_both_ways_within(const Eigen::Vector3f* a, int na, float radius, int* a_to,
+                                            float* a_d2, int* b_to, float* b_d2) {
+  const float r2 = radius * radius, slab = radius * kSlabMargin;
+  // Slabs that hold most of the set, or few pairs in all: scan all pairs.
+  if (!(2 * slab < kSlabOfExtent * extent_along_) || na * n < kMinPairsForSlabs) {
+    nearest_both_ways(a, na, a_to, a_d2, b_to, b_d2);
+    for (int i = 0; i < na; ++i)
+      if (!(a_d2[i] <= r2)) a_d2[i] = kFar, a_to[i] = -1;
+    for (int j = 0; j < n; ++j)
+      if (!(b_d2[j] <= r2)) b_d2[j] = kFar, b_to[j] = -1;
+    return;
+  }
+  if (!sorted_) sort_along();
+  const float *xs = sorted_x_.data(), *ys = sorted_y_.data(), *zs = sorted_z_.data();
+  const float* along = along_ == 0 ? xs : along_ == 1 ? ys : zs;
+  const int* index = sorted_index_.data();
+  float* held_d2 = sorted_b_d2_.data();
+  int* held_to = sorted_b_to_.data();
+  std::fill_n(held_d2, n, kFar);
+  std::fill_n(held_to, n, -1);
+  for (int i = 0; i < na; ++i) {
+    const Eigen::Vector3f& q = a[i];
+    const float key = q[along_];
+    const int begin = int(std::lower_bound(along, along + n, key - slab) - along);
+    const int end = int(std::upper_bound(along + begin, along + n, key + slab) - along);
+    const __m128 qx = _mm_set1_ps(q.x()), qy = _mm_set1_ps(q.y()), qz = _mm_set1_ps(q.z());
+    const __m128i i4 = _mm_set1_epi32(i);
+    __m128 low4 = _mm_set1_ps(kFar);
+    __m128i at4 = _mm_set1_epi32(INT_MAX);
+    int j = begin;
+    for (; j + 4 <= end; j += 4) {
+      const __m128 d = distances4(xs, ys, zs, j, qx, qy, qz);
+      keep_lowest_least(d, _mm_loadu_si128(reinterpret_cast<const __m128i*>(index + j)), &low4, &at4);
+      __m128 held = _mm_loadu_ps(held_d2 + j);
+      __m128i to = _mm_loadu_si128(reinterpret_cast<const __m128i*>(held_to + j));
+      keep_first_least(d, i4, &held, &to);  // a[] comes in order: strictly closer keeps the first
+      _mm_storeu_ps(held_d2 + j, held);
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(held_to + j), to);
+    }
+    alignas(16) float lanes[4];
+    alignas(16) int lane_at[4];
+    _mm_store_ps(lanes, low4);
+    _mm_store_si128(reinterpret_cast<__m128i*>(lane_at), at4);
+    float low = kFar;
+    int best = INT_MAX;
+    for (int l = 0; l < 4; ++l)
+      if (lanes[l] < low || (lanes[l] == low && lane_at[l] < best)) low = lanes[l], best = lane_at[l];
+    for (; j < end; ++j) {
+      const float dx = xs[j] - q.x(), dy = ys[j] - q.y(), dz = zs[j] - q.z();
+      const float d = dx * dx + dy * dy + dz * dz;
+      if (d < low || (d == low && index[j] < best)) low = d, best = index[j];
+      if (d < held_d2[j]) held_d2[j] = d, held_to[j] = i;
+    }
+    const bool within = low <= r2;
+    a_d2[i] = within ? low : kFar;
+    a_to[i] = within ? best : -1;
+  }
+  for (int k = 0; k < n; ++k) {
+    const bool within = held_d2[k] <= r2;
+    b_d2[index[k]] = within ? held_d2[k] : kFar;
+    b_to[index[k]] = within ? held_to[k] : -1;
+  }
+}
+
 void PointColumns::reserve(int capacity) {
-  x.assign(std::size_t(capacity), 0.0f);
-  y.assign(std::size_t(capacity), 0.0f);
-  z.assign(std::size_t(capacity), 0.0f);
+  for (auto* column : {&x, &y, &z, &sorted_x_, &sorted_y_, &sorted_z_, &sorted_b_d2_})
+    column->assign(std::size_t(capacity), 0.0f);
+  sorted_index_.assign(std::size_t(capacity), 0);
+  sorted_key_.assign(std::size_t(capacity), 0);
+  sorted_b_to_.assign(std::size_t(capacity), -1);
   n = 0;
 }
 
 bool PointColumns::assign(const Eigen::Vector3f* p, int count) {
   if (count > int(x.size())) return false;
-  for (int i = 0; i < count; ++i)
+  Eigen::Vector3f low = Eigen::Vector3f::Constant(kFar), high = -low;
+  for (int i = 0; i < count; ++i) {
     x[std::size_t(i)] = p[i].x(), y[std::size_t(i)] = p[i].y(), z[std::size_t(i)] = p[i].z();
+    low = low.cwiseMin(p[i]), high = high.cwiseMax(p[i]);
+  }
   n = count;
+  const Eigen::Vector3f extent = high - low;
+  along_ = extent.x() >= extent.y() && extent.x() >= extent.z() ? 0 : extent.y() >= extent.z() ? 1 : 2;
+  extent_along_ = n > 0 ? extent[along_] : 0.0f;
+  sorted_ = false;
   return true;
+}
+
+// The points sorted along the longest side, once per set: each one's coordinate there as an
+// unsigned int in the same order as the floats (not-a-number as infinity: last), its index below
+// it, so a plain sort of integers gives the order and ties to the lower index.
+void PointColumns::sort_along() {
+  const float* along = along_ == 0 ? x.data() : along_ == 1 ? y.data() : z.data();
+  std::uint64_t* key = sorted_key_.data();
+  for (int j = 0; j < n; ++j) {
+    const float v = std::isnan(along[j]) ? HUGE_VALF : along[j];
+    std::uint32_t bits;
+    std::memcpy(&bits, &v, sizeof bits);
+    bits = bits & 0x80000000u ? ~bits : bits | 0x80000000u;
+    key[j] = (std::uint64_t(bits) << 32) | std::uint32_t(j);
+  }
+  std::sort(key, key + n);
+  for (int k = 0; k < n; ++k) {
+    const int j = int(key[k] & 0xffffffffu);
+    sorted_index_[std::size_t(k)] = j;
+    sorted_x_[std::size_t(k)] = x[std::size_t(j)];
+    sorted_y_[std::size_t(k)] = y[std::size_t(j)];
+    sorted_z_[std::size_t(k)] = z[std::size_t(j)];
+  }
+  sorted_ = true;
 }
 
 }  // namespace pipeloc

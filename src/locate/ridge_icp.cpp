@@ -62,11 +62,12 @@ int RidgeIcp::place_model_ridge(const Pose& pose, const Eigen::Vector2f& axis, f
                            int(model_ridge_.size()));
 }
 
-// Nearest partners both ways between the model's ridge (model_ridge_[0..nm)) and the observed
-// one, laid out in observed_columns_: model_to_/model_d2_ and observed_to_/observed_d2_.
-void RidgeIcp::pair_up(int nm) {
-  observed_columns_.nearest_both_ways(model_ridge_.data(), nm, model_to_.data(), model_d2_.data(),
-                                      observed_to_.data(), observed_d2_.data());
+// Nearest partners within radius_mm both ways between the model's ridge (model_ridge_[0..nm)) and
+// the observed one, laid out in observed_columns_: model_to_/model_d2_ and observed_to_/observed_d2_
+// (-1 where none lies within it). Only partners within the gate or cap count, so that is the radius.
+void RidgeIcp::pair_up(int nm, float radius_mm) {
+  observed_columns_.nearest_both_ways_within(model_ridge_.data(), nm, radius_mm, model_to_.data(),
+                                             model_d2_.data(), observed_to_.data(), observed_d2_.data());
 }
 
 // The iterations on the observed ridge, laid out in observed_columns_.
@@ -90,7 +91,7 @@ RidgeFit RidgeIcp::iterate(const IcpStart& start, const RidgeView& observed, int
     } else {
       nm = place_model_ridge(fit.pose, observed.axis, observed.cell_mm);
     }
-    pair_up(nm);
+    pair_up(nm, gate);
     int pairs = 0;
     for (int i = 0; i < nm; ++i) {  // 2.2.2
       const int j = model_to_[std::size_t(i)];
@@ -126,7 +127,7 @@ void RidgeIcp::score(const RidgeView& observed, RidgeFit* fit) {
   const int nm = place_model_ridge(fit->pose, observed.axis, observed.cell_mm);
   fit->model_ridge_points = nm;
   const float cap = 0.5f * lm_->tube_d_mm;
-  pair_up(nm);
+  pair_up(nm, cap);
   const float m2o = truncated_mean(model_d2_.data(), nm, cap, &fit->matched);
   const float o2m = truncated_mean(observed_d2_.data(), observed.count, cap, nullptr);
   fit->cost_mm = 0.5f * (m2o + o2m);

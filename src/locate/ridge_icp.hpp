@@ -64,7 +64,7 @@ class RidgeIcp {
 
  private:
   int place_model_ridge(const Pose& pose, const Eigen::Vector2f& axis, float cell_mm);
-  void pair_up(int nm);
+  void pair_up(int nm, float radius_mm);
   RidgeFit iterate(const IcpStart& start, const RidgeView& observed, int max_iterations);
   void score(const RidgeView& observed, RidgeFit* fit);
 
@@ -73,7 +73,8 @@ class RidgeIcp {
   std::vector<Eigen::Vector3f> model_ridge_;  // P_m
   std::vector<Eigen::Vector3f> src_, dst_;    // correspondences
   PointColumns observed_columns_;
-  std::vector<int> model_to_, observed_to_;  // nearest partners both ways (PointColumns::nearest_both_ways)
+  std::vector<int> model_to_,
+      observed_to_;  // nearest partners both ways (PointColumns::nearest_both_ways_within)
   std::vector<float> model_d2_, observed_d2_;
   RidgeBuffers ridge_;
 };
