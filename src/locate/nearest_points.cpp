@@ -3,7 +3,6 @@
 #include <emmintrin.h>
 
 #include <algorithm>
-#include <climits>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -61,6 +60,12 @@ inline void keep_lowest_least(__m128 d, __m128i index4, __m128* low4, __m128i* a
                    _mm_and_si128(_mm_castps_si128(_mm_cmpeq_ps(d, *low4)), _mm_cmplt_epi32(index4, *at4)));
   *low4 = _mm_min_ps(d, *low4);
   *at4 = _mm_or_si128(_mm_and_si128(take, index4), _mm_andnot_si128(take, *at4));
+}
+
+// Partners farther than sqrt(r2) are none: -1 at kFar.
+inline void forget_beyond(float r2, float* d2, int* to, int count) {
+  for (int k = 0; k < count; ++k)
+    if (!(d2[k] <= r2)) d2[k] = kFar, to[k] = -1;
 }
 
 }  // namespace
@@ -134,10 +139,8 @@ void PointColumns::nearest_both_ways_within(const Eigen::Vector3f* a, int na, fl
   // Slabs that hold most of the set, or few pairs in all: scan all pairs.
   if (!(2 * slab < kSlabOfExtent * extent_along_) || na * n < kMinPairsForSlabs) {
     nearest_both_ways(a, na, a_to, a_d2, b_to, b_d2);
-    for (int i = 0; i < na; ++i)
-      if (!(a_d2[i] <= r2)) a_d2[i] = kFar, a_to[i] = -1;
-    for (int j = 0; j < n; ++j)
-      if (!(b_d2[j] <= r2)) b_d2[j] = kFar, b_to[j] = -1;
+    forget_beyond(r2, a_d2, a_to, na);
+    forget_beyond(r2, b_d2, b_to, n);
     return;
   }
   if (!sorted_) sort_along();
@@ -156,7 +159,7 @@ void PointColumns::nearest_both_ways_within(const Eigen::Vector3f* a, int na, fl
     const __m128 qx = _mm_set1_ps(q.x()), qy = _mm_set1_ps(q.y()), qz = _mm_set1_ps(q.z());
     const __m128i i4 = _mm_set1_epi32(i);
     __m128 low4 = _mm_set1_ps(kFar);
-    __m128i at4 = _mm_set1_epi32(INT_MAX);
+    __m128i at4 = _mm_set1_epi32(-1);
     int j = begin;
     for (; j + 4 <= end; j += 4) {
       const __m128 d = distances4(xs, ys, zs, j, qx, qy, qz);
@@ -167,29 +170,20 @@ void PointColumns::nearest_both_ways_within(const Eigen::Vector3f* a, int na, fl
       _mm_storeu_ps(held_d2 + j, held);
       _mm_storeu_si128(reinterpret_cast<__m128i*>(held_to + j), to);
     }
-    alignas(16) float lanes[4];
-    alignas(16) int lane_at[4];
-    _mm_store_ps(lanes, low4);
-    _mm_store_si128(reinterpret_cast<__m128i*>(lane_at), at4);
-    float low = kFar;
-    int best = INT_MAX;
-    for (int l = 0; l < 4; ++l)
-      if (lanes[l] < low || (lanes[l] == low && lane_at[l] < best)) low = lanes[l], best = lane_at[l];
+    int best;
+    float low = first_least_of_lanes(low4, at4, &best);
     for (; j < end; ++j) {
       const float dx = xs[j] - q.x(), dy = ys[j] - q.y(), dz = zs[j] - q.z();
       const float d = dx * dx + dy * dy + dz * dz;
       if (d < low || (d == low && index[j] < best)) low = d, best = index[j];
       if (d < held_d2[j]) held_d2[j] = d, held_to[j] = i;
     }
-    const bool within = low <= r2;
-    a_d2[i] = within ? low : kFar;
-    a_to[i] = within ? best : -1;
+    a_d2[i] = low;
+    a_to[i] = best;
   }
-  for (int k = 0; k < n; ++k) {
-    const bool within = held_d2[k] <= r2;
-    b_d2[index[k]] = within ? held_d2[k] : kFar;
-    b_to[index[k]] = within ? held_to[k] : -1;
-  }
+  for (int k = 0; k < n; ++k) b_d2[index[k]] = held_d2[k], b_to[index[k]] = held_to[k];
+  forget_beyond(r2, a_d2, a_to, na);
+  forget_beyond(r2, b_d2, b_to, n);
 }
 
 void PointColumns::reserve(int capacity) {
