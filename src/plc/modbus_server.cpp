@@ -150,7 +150,9 @@ bool ModbusServer::admit(bool plc, Clock::time_point now) {
 }
 
 void ModbusServer::accept_clients(Clock::time_point now) {
-  for (;;) {  // until EAGAIN: a burst of connects never waits in the backlog for the next round
+  // Until EAGAIN or kAcceptsPerRound: a flood of connects neither waits for the next poll timeout
+  // nor holds up the clients already connected.
+  for (int accepted = 0; accepted < kAcceptsPerRound; ++accepted) {
     sockaddr_in addr{};
     socklen_t len = sizeof addr;
     const int fd =

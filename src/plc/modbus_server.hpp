@@ -4,7 +4,9 @@
 // connection) delays another client, the heartbeat, the watchdog or shutdown:
 // - each request is framed by its MBAP length in the connection's own buffer and answered once
 //   complete; one not complete plc.request_timeout_ms after its first byte closes its connection;
-// - the listen socket is drained each round (backlog kListenBacklog, not max_clients);
+// - the listen socket is drained each round, kAcceptsPerRound at a time; its backlog is the
+//   kernel's largest (not max_clients), so connects queued while the thread is descheduled are
+//   not dropped (a dropped SYN costs the client 1 s);
 // - a connection without a request for plc.idle_timeout_ms is closed; TCP keepalive finds peers
 //   that vanished (a PLC rebooted);
 // - slots: when plc.max_clients are taken, a new connection closes one that never sent a request,
@@ -36,7 +38,8 @@ class LogLimiter {
 
 class ModbusServer : public PlcLink {
  public:
-  static constexpr int kListenBacklog = 256;
+  static constexpr int kListenBacklog = 4096;   // SOMAXCONN; the kernel caps it at net.core.somaxconn
+  static constexpr int kAcceptsPerRound = 256;  // then clients are served before the next ones
   static constexpr int kRequestsPerRound = 16;  // per connection, so pipelining cannot starve others
 
   explicit ModbusServer(const PlcConfig& cfg);  // binds and listens; throws PlcError naming address:port

@@ -1,5 +1,6 @@
 """Hostile clients against `pipeloc serve` (issue 21): a byte dribbler, half requests, idle
-connections beyond max_clients, 1,000 connections churned (half sending garbage), 32 pollers at
+connections beyond max_clients, 1,000 connections churned (half sending garbage; again with the
+service stopped for 0.5 s), 32 pollers at
 100 Hz beside LOCATE cycles, garbage of every function code. Meanwhile a probe polls STATUS..HEARTBEAT
 at 100 Hz; the test asserts the probe's worst response, the longest heartbeat gap, connect latency,
 that the PLC's handshake is served, and how fast SIGTERM ends the service. The load runs in a
@@ -308,6 +309,28 @@ class Churn(Hostile):
         self.assertLess(total, 5.0 * SLOWDOWN)
         self.assertLess(worst_connect, ACCEPT_S)
         self.assertLess(worst_accept, ACCEPT_S)
+
+
+
+class ChurnStopped(Hostile):
+    # The churn begun while the service is stopped (SIGSTOP) for 0.5 s, as a loaded machine deschedules
+    # it: the kernel completes each handshake and queues it for accept(), so no connect waits for
+    # the service unless that queue is full; then the SYN is dropped and retried after 1 s. The
+    # 500 connections that send garbage and close do not wait for a reply: all are queued.
+    def test_connects_queued_while_the_service_is_stopped_are_kept(self):
+        self.service.proc.send_signal(signal.SIGSTOP)
+        child, q = run_in_child(churn, PORT, 1000, 4)
+        time.sleep(0.5)
+        self.service.proc.send_signal(signal.SIGCONT)
+        total, worst_connect, worst_accept, failures = q.get(timeout=120)
+        child.join(10)
+        plc = Raw(PORT)
+        status, worst = handshake(plc, LOCATE, 1)
+        report("churn-stopped", churn_total=total, churn_worst_connect=worst_connect,
+               churn_worst_accept=worst_accept, failures=len(failures), handshake_worst=worst)
+        self.assertEqual(failures, [], failures[:5])
+        self.assertLess(worst_connect, ACCEPT_S)
+        self.assertIn(status, (2, 3))
 
 
 class Pollers(Hostile):
