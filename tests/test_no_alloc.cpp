@@ -119,6 +119,7 @@ CountedCycles count_service_cycles(Service& service, const AppConfig& cfg, bool 
     const reg::Result& r = service.run(1, std::uint16_t(cycle + 2), Clock::now());
     std::uint16_t map[reg::kSize];
     reg::write_result(r, std::uint16_t(cycle + 2), cfg.plc.encoding, map);
+    service.search_again();  // the second searches, after the result, as the cycle thread runs them
     service.log().write(service.record());
     if (publish_status) service.publish_status();
     g_counting = false;
@@ -138,6 +139,7 @@ TEST(NoAllocation, FiftyServiceCyclesOnTheSimSourceAllocateNothing) {
   AppConfig cfg = service_config(dir);
   Service service(cfg, model, std::make_unique<SimSource>(model, cfg.source.sim));
   service.run(1, 1, Clock::now());  // the first cycle may settle
+  service.search_again();
   service.log().write(service.record());
   service.after_publish();
   const CountedCycles counted = count_service_cycles(service, cfg, false);
@@ -175,6 +177,7 @@ TEST(NoAllocation, FiftyServiceCyclesAllocateNothingWithTheStatusPagePolled) {
     }
   });
   service.run(1, 1, Clock::now());  // the first cycle may settle
+  service.search_again();
   service.log().write(service.record());
   service.publish_status();
   service.after_publish();

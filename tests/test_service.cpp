@@ -560,13 +560,54 @@ TEST(Service, BudgetCutsASlowConfigurationShort) {
   }
 }
 
+// The second searches (retry_surface_cell_of_d) run after the result is handed to
+// the PLC: the result, its pose and its cycle time stay as they were; the record gains their time.
+TEST(Service, SecondSearchesComeAfterTheResultAndChangeNothingHandedOut) {
+  test::TempDir dir;
+  AppConfig cfg = test::sim_config(dir, 20, 21);
+  cfg.service.budget_ms = 5000;
+  cfg.locate.retry_surface_cell_of_d = 0.25;
+  Service service(cfg, sbend(), std::make_unique<SimSource>(sbend(), cfg.source.sim));
+  int searched_again = 0;
+  for (int i = 0; i < 4; ++i) {
+    const reg::Result r = service.run(1, std::uint16_t(i + 1), Clock::now());
+    const CycleRecord before = service.record();
+    const int first_pick = service.output().pick();
+    const Pose pick_pose =
+        first_pick >= 0 ? service.output().estimates[std::size_t(first_pick)].model_to_cam : Pose::Identity();
+    service.search_again();
+    const reg::Result& after = service.result();
+    EXPECT_EQ(after.status, r.status);
+    EXPECT_EQ(after.count, r.count);
+    EXPECT_EQ(after.cycle_ms, r.cycle_ms);
+    ASSERT_EQ(after.pose.has_value(), r.pose.has_value());
+    if (r.pose) {
+      EXPECT_EQ(after.pose->xyz_mm, r.pose->xyz_mm);
+    }
+    const int pick = service.output().pick();
+    ASSERT_EQ(pick >= 0, first_pick >= 0);
+    if (pick >= 0) {
+      EXPECT_TRUE(service.output().estimates[std::size_t(pick)].model_to_cam.isApprox(pick_pose));
+    }
+    const CycleRecord& rec = service.record();
+    EXPECT_EQ(rec.cycle_ms, before.cycle_ms);
+    EXPECT_GE(rec.accepted, before.accepted);
+    EXPECT_GE(rec.stages.total_ms - rec.stages.again_ms, before.stages.total_ms - 1e-9);
+    searched_again += rec.stages.again_ms > 0;
+    service.after_publish();
+  }
+  EXPECT_GT(searched_again, 0) << "no LOCATE searched a region again: the test shows nothing";
+}
+
 TEST(Service, TimingLogHasALinePerCycleAndSummaries) {
   SimService s(6);
   for (int i = 0; i < 6; ++i) {
     s.service->run(1, std::uint16_t(i + 1), Clock::now());
+    s.service->search_again();  // as the cycle thread does, after handing out the result
     s.service->log().write(s.service->record());
   }
   s.service->run(2, 7, Clock::now());
+  s.service->search_again();  // NEXT: nothing to search
   s.service->log().write(s.service->record());
   std::istringstream in(test::read_text(s.service->log().path()));
   std::string line;
@@ -575,10 +616,11 @@ TEST(Service, TimingLogHasALinePerCycleAndSummaries) {
     const nlohmann::json j = nlohmann::json::parse(line);
     if (j["event"] == "cycle") {
       ++cycles;
-      for (const char* key :
-           {"trigger_unix_ms", "frame_age_ms", "grab_ms", "zbuffer_ms", "normals_ms", "regions_ms",
-            "ridge_icp_ms", "cycle_ms", "candidates", "tried", "status", "score", "budget_use"})
+      for (const char* key : {"trigger_unix_ms", "frame_age_ms", "grab_ms", "zbuffer_ms", "normals_ms",
+                              "regions_ms", "ridge_icp_ms", "locate_ms", "again_ms", "cycle_ms", "candidates",
+                              "tried", "status", "score", "budget_use"})
         EXPECT_TRUE(j.contains(key)) << key;
+      EXPECT_GE(j["again_ms"].get<double>(), 0.0);
       if (j["cmd"] == 1) {
         EXPECT_GT(j["frame_age_ms"].get<double>(), 0.0);
       }

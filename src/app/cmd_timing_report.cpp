@@ -176,8 +176,10 @@ void add_timing_report(CLI::App& app) {
   cmd->add_option("logs", opt->logs, "timing.jsonl files (rotated ones too)")->required();
   cmd->add_option("--png", opt->png, "histogram PNG to write (default: beside the first log)");
   cmd->callback([opt] {
-    static const char* const kStages[] = {"cycle_ms",   "grab_ms", "frame_age_ms", "zbuffer_ms", "normals_ms",
-                                          "regions_ms", "axis_ms", "ridge_icp_ms", "refine_ms",  "verify_ms"};
+    // again_ms: the second searches, after the result (not in cycle_ms).
+    static const char* const kStages[] = {"cycle_ms",   "grab_ms",    "frame_age_ms", "zbuffer_ms",
+                                          "normals_ms", "regions_ms", "axis_ms",      "ridge_icp_ms",
+                                          "refine_ms",  "verify_ms",  "again_ms"};
     std::map<std::string, std::vector<double>> series;  // a stage's times where it ran (> 0)
     std::map<std::string, std::vector<double>> by_outcome;
     std::vector<Cycle> all;

@@ -164,7 +164,11 @@ inline float hypothesis_quality(const Verification& v) {
 struct Deadline {
   Clock::time_point at = Clock::time_point::max();
   const std::atomic<bool>* cancel = nullptr;
-  bool passed() const { return (cancel && cancel->load(std::memory_order_relaxed)) || Clock::now() >= at; }
+  const std::atomic<bool>* interrupt = nullptr;  // a second flag (the second searches: a command waits)
+  bool passed() const {
+    return (cancel && cancel->load(std::memory_order_relaxed)) ||
+           (interrupt && interrupt->load(std::memory_order_relaxed)) || Clock::now() >= at;
+  }
 };
 
 // What the stages share from the model and the frame; read only.

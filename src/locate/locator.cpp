@@ -6,6 +6,18 @@
 #include "locate/speckles.hpp"
 
 namespace pipeloc {
+namespace {
+
+// The candidate stages of one worker's buffers, summed over the threads.
+void add_candidate_times(const CandidateTimes& of, StageTimes* to) {
+  to->axis_ms += of.axis_ms;
+  to->ridge_icp_ms += of.ridge_icp_ms;
+  to->refine_ms += of.refine_ms;
+  to->verify_ms += of.verify_ms;
+}
+
+}  // namespace
+
 Locator::Locator(const PipeModel& model, const LocateConfig& cfg, const Intrinsics& camera)
     : model_(model),
       user_cfg_(cfg),
@@ -59,9 +71,17 @@ Locator::Locator(const PipeModel& model, const LocateConfig& cfg, const Intrinsi
   out_.traces.reserve(std::size_t(cfg.max_candidates));
 }
 
-const LocateOutput& Locator::locate(const Image<float>& frame_depth, const CameraInfo& camera,
+const LocateOutput& Locator::locate(const Image<float>& depth_mm, const CameraInfo& camera,
                                     Clock::time_point deadline) {
+  locate_to_pick(depth_mm, camera, deadline);
+  return search_again();
+}
+
+const LocateOutput& Locator::locate_to_pick(const Image<float>& frame_depth, const CameraInfo& camera,
+                                            Clock::time_point deadline) {
   const auto t_start = Clock::now();
+  frame_start_ = t_start;
+  searches_again_ = 0;
   out_.estimates.clear();
   out_.traces.clear();
   out_.times = {};
@@ -113,7 +133,6 @@ const LocateOutput& Locator::locate(const Image<float>& frame_depth, const Camer
   // while one still grows regions.
   out_.traces.assign(std::size_t(cfg_.max_candidates), CandidateTrace{});
   std::fill(slot_filled_.begin(), slot_filled_.end(), 0);
-  searches_again_ = 0;
   for (Worker& wk : workers_) wk.buf.times = wk.retry_buf.times = {};
   const Clock::time_point start_by =
       deadline == Clock::time_point::max() ? deadline : deadline - ms_duration(candidate_ms_avg_);
@@ -125,14 +144,7 @@ const LocateOutput& Locator::locate(const Image<float>& frame_depth, const Camer
   pool_.run(pool_.size(), [&](int task, int worker) { regions_and_candidates(handout, task, worker); });
   first_leftover_ = int(rb_.candidates.size());
   if (cfg_.leftover_regions) leftover_candidates(frame, first_leftover_);
-  // Beyond the paper: the regions whose ridge fits end in poses the image does not confirm are
-  // searched again, their whole top surface matched (retry_surface_cell_of_d). A ridge, one point
-  // per cross-section, places a short pipe or a short piece of one by a few points (an 8.4 mm
-  // elbow's region: 8-20), and its fits end turned or flipped; the surface holds the region's
-  // shape. Only for regions the ridge search failed on: for every region, the surface's fits lose
-  // long pipes (docs/experiments.md). Its poses are reported, never handed out (decide()): the
-  // second searches come after every first one, in the time left.
-  search_again(frame);
+  frame_ = frame;  // for search_again()
   const int n = int(rb_.candidates.size());
   out_.traces.resize(std::size_t(n));
   constexpr double kAverageWeight = 0.2;
@@ -146,26 +158,47 @@ const LocateOutput& Locator::locate(const Image<float>& frame_depth, const Camer
     candidate_ms_avg_ = candidate_ms_avg_ == 0
                             ? done_ms / done
                             : (1 - kAverageWeight) * candidate_ms_avg_ + kAverageWeight * done_ms / done;
-  for (const Worker& wk : workers_)
-    for (const CandidateBuffers* b : {&wk.buf, &wk.retry_buf}) {
-      out_.times.axis_ms += b->times.axis_ms;
-      out_.times.ridge_icp_ms += b->times.ridge_icp_ms;
-      out_.times.refine_ms += b->times.refine_ms;
-      out_.times.verify_ms += b->times.verify_ms;
-    }
+  for (const Worker& wk : workers_) add_candidate_times(wk.buf.times, &out_.times);
   for (int c = 0; c < n; ++c) {
     if (out_.traces[std::size_t(c)].outcome == CandidateOutcome::budget) out_.budget_exhausted = true;
     if (slot_filled_[std::size_t(c)]) merge_estimate(c);
   }
+  rank();
+  out_.times.total_ms = ms_since(t_start);
+  return out_;
+}
 
-  // 7. Rank: best score first; the first pickable one is the pick handed to the PLC.
-  // Ties keep candidate order; std::sort with that tie-break, since stable_sort allocates.
+// Beyond the paper: the regions whose ridge fits end in poses the image does not confirm are
+// searched again, their whole top surface matched (retry_surface_cell_of_d). A ridge, one point
+// per cross-section, places a short pipe or a short piece of one by a few points (an 8.4 mm
+// elbow's region: 8-20), and its fits end turned or flipped; the surface holds the region's
+// shape. Only for regions the ridge search failed on: for every region, the surface's fits lose
+// long pipes (docs/experiments.md). Its poses are reported, never handed out (decide()): the
+// second searches come after the pick, in the time the frame's deadline leaves.
+const LocateOutput& Locator::search_again(const std::atomic<bool>* interrupt) {
+  const int n = searches_again_;
+  if (n == 0) return out_;
+  searches_again_ = 0;  // once per frame
+  const auto t = Clock::now();
+  search_regions_again(frame_, n, interrupt);
+  for (const Worker& wk : workers_) add_candidate_times(wk.retry_buf.times, &out_.times);
+  for (int k = 0; k < n; ++k) {  // in the candidates' order, as the first searches were merged
+    const int c = to_search_again_[std::size_t(k)];
+    if (slot_filled_[std::size_t(c)]) merge_estimate(c);
+  }
+  rank();
+  out_.times.again_ms = ms_since(t);
+  out_.times.total_ms = ms_since(frame_start_);
+  return out_;
+}
+
+// 7. Rank: best score first; the first pickable one is the pick handed to the PLC.
+// Ties keep candidate order; std::sort with that tie-break, since stable_sort allocates.
+void Locator::rank() {
   std::sort(out_.estimates.begin(), out_.estimates.end(), [](const PipeEstimate& a, const PipeEstimate& b) {
     return a.score != b.score ? a.score > b.score : a.candidate < b.candidate;
   });
   if (int(out_.estimates.size()) > cfg_.result_cap()) out_.estimates.resize(std::size_t(cfg_.result_cap()));
-  out_.times.total_ms = ms_since(t_start);
-  return out_;
 }
 
 void Locator::regions_and_candidates(Handout& h, int task, int worker) {
@@ -344,19 +377,17 @@ void Locator::work_candidate(int c, Worker& wk, const Frame& f) {
     to_search_again_[std::size_t(searches_again_++)] = c;
 }
 
-void Locator::search_again(const Frame& f) {
-  const int n = searches_again_;
-  if (n == 0) return;
+void Locator::search_regions_again(const Frame& f, int n, const std::atomic<bool>* interrupt) {
   std::sort(to_search_again_.begin(), to_search_again_.begin() + n);  // in the candidates' order
   std::atomic<int> next{0};
   pool_.run(pool_.size(), [&](int, int worker) {
     for (int k = next++; k < n; k = next++)
-      if (!out_of_time(f.deadline))
-        search_again(to_search_again_[std::size_t(k)], workers_[std::size_t(worker)], f);
+      if (!Deadline{f.deadline, cancel_, interrupt}.passed())
+        search_region_again(to_search_again_[std::size_t(k)], workers_[std::size_t(worker)], f, interrupt);
   });
 }
 
-void Locator::search_again(int c, Worker& wk, const Frame& f) {
+void Locator::search_region_again(int c, Worker& wk, const Frame& f, const std::atomic<bool>* interrupt) {
   const CandidateContext again = context(retry_starts_, retry_cfg_, f);
   CandidateInput surface = candidate_input(c);
   Eigen::Vector3f* const ridge = surface.ridge;
@@ -366,8 +397,8 @@ void Locator::search_again(int c, Worker& wk, const Frame& f) {
   CandidateTrace retried;
   retried.ridge_begin = trace.ridge_begin;
   retried.searched_again = true;
-  if (pipeloc::work_candidate(again, surface, Deadline{f.deadline_hard, cancel_}, &wk.retry_buf, &retried,
-                              &slot_[std::size_t(c)])) {
+  if (pipeloc::work_candidate(again, surface, Deadline{f.deadline_hard, cancel_, interrupt}, &wk.retry_buf,
+                              &retried, &slot_[std::size_t(c)])) {
     slot_filled_[std::size_t(c)] = 1;
     trace = retried;
     std::copy_n(wk.retry_ridge.begin(), retried.ridge_count, ridge);

@@ -18,6 +18,7 @@ namespace pipeloc {
 struct StageTimes {
   double zbuffer_ms = 0, normals_ms = 0, regions_ms = 0, axis_ms = 0, ridge_icp_ms = 0, refine_ms = 0,
          verify_ms = 0, total_ms = 0;
+  double again_ms = 0;  // of total_ms, the second searches after the pick (search_again())
 };
 
 struct LocateOutput {
@@ -44,8 +45,17 @@ class Locator {
 
   // Localizes pipes in depth_mm (0 = no reading). Candidates are worked best first; when the
   // deadline passes, what has been found so far is returned with budget_exhausted set.
+  // locate_to_pick() and then search_again().
   const LocateOutput& locate(const Image<float>& depth_mm, const CameraInfo& camera,
                              Clock::time_point deadline = Clock::time_point::max());
+  // Every search whose poses may be handed out: the pick (output().pick()) is final when it
+  // returns. depth_mm and camera must live until search_again() has run.
+  const LocateOutput& locate_to_pick(const Image<float>& depth_mm, const CameraInfo& camera,
+                                     Clock::time_point deadline = Clock::time_point::max());
+  // The second searches of that frame (retry_surface_cell_of_d) before its deadline or until
+  // *interrupt is set (the service: the PLC's next command waits), their poses merged and ranked
+  // with the others: reported, never handed out, so the pick does not move.
+  const LocateOutput& search_again(const std::atomic<bool>* interrupt = nullptr);
 
   // A flag that, once set, ends a cycle as if its deadline had passed (the service's shutdown).
   void set_cancel_flag(const std::atomic<bool>* cancel) { cancel_ = cancel; }
@@ -92,10 +102,10 @@ class Locator {
   // The first search of candidate c; a region whose poses the image did not confirm is listed
   // for search_again().
   void work_candidate(int c, Worker& wk, const Frame& f);
-  // The second search of the regions listed, on their whole top surface, before the deadline
-  // (retry_surface_cell_of_d); of one region.
-  void search_again(const Frame& f);
-  void search_again(int c, Worker& wk, const Frame& f);
+  // The second search of the first n regions listed, on their whole top surface, before the
+  // deadline (retry_surface_cell_of_d); of one region.
+  void search_regions_again(const Frame& f, int n, const std::atomic<bool>* interrupt);
+  void search_region_again(int c, Worker& wk, const Frame& f, const std::atomic<bool>* interrupt);
   void merge_estimate(int c);
   // Candidates of what the accepted poses of candidates [0, n) left of their regions, worked
   // before the deadline (leftover_regions).
@@ -103,6 +113,7 @@ class Locator {
   // Row bands of the frame-wide stages: band b of n covers rows [band_begin(b), band_begin(b + 1)).
   static int band_begin(int band, int bands, int rows) { return rows * band / bands; }
   void build_zbuffer_banded(const Image<float>& depth, const CameraInfo& camera, const Pose& bin_to_cam);
+  void rank();
   bool out_of_time(Clock::time_point deadline) const {
     return (cancel_ && cancel_->load(std::memory_order_relaxed)) || Clock::now() >= deadline;
   }
@@ -123,6 +134,8 @@ class Locator {
   bool retry_on_surface_ = false;
   std::vector<int> to_search_again_;    // candidates whose first search was not confirmed ...
   std::atomic<int> searches_again_{0};  // ... this many this frame
+  Frame frame_{};                       // the frame locate_to_pick() worked, for search_again()
+  Clock::time_point frame_start_{};     // when its locate_to_pick() began
   ZBuffer zb_;
   ZBufferPoints zb_points_;
   int camera_width_ = 0, camera_height_ = 0;

@@ -16,7 +16,7 @@ struct CycleRecord {
   double queued_ms = 0;        // trigger to the start of the cycle (waiting behind another command)
   double grab_ms = 0;          // trigger to frame in hand
   double frame_age_ms = 0;     // frame capture to result
-  StageTimes stages;           // of the localizer
+  StageTimes stages;           // of the localizer (again_ms: its second searches, after the result)
   double cycle_ms = 0;         // trigger to result
   double budget_ms = 0;
   GrabStatus grab = GrabStatus::ok;

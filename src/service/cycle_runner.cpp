@@ -37,6 +37,7 @@ void CycleRunner::submit(const PlcRequest& request) {
     std::lock_guard<std::mutex> lock(mutex_);
     pending_ = request;
     has_pending_ = true;
+    waiting_ = true;
   }
   wake_.notify_all();
 }
@@ -68,6 +69,7 @@ void CycleRunner::loop() {
       if (stop_) return;
       req = pending_;
       has_pending_ = false;
+      waiting_ = false;
     }
     try {
       run_one(req);
@@ -93,6 +95,8 @@ void CycleRunner::run_one(const PlcRequest& req) {
   }
   const std::uint64_t one = 1;
   [[maybe_unused]] const auto w = ::write(wake_fd_, &one, sizeof one);
+  // The PLC has its result: these are for the log and the overlay, and end when a command waits.
+  service_.search_again(&waiting_);
   service_.log().write(service_.record());
   service_.publish_status();
   if (!cancel_) service_.after_publish();  // shutting down: the simulated bin can stay as it is

@@ -1,7 +1,9 @@
 // The cycle thread: takes commands from the PLC front end (which owns the Modbus context) and
 // runs them on the Service, one at a time. A command submitted while one runs waits; a newer
 // one replaces it (each REQ_ID change runs once, the latest wins). Results come back through
-// take_result(); wake_fd() becomes readable when one is ready, for the front end's poll().
+// take_result(); wake_fd() becomes readable when one is ready, for the front end's poll(). After
+// a LOCATE's result is handed over, its second searches run (for the log and the overlay) until
+// a command is submitted.
 #pragma once
 
 #include <atomic>
@@ -52,6 +54,7 @@ class CycleRunner {
   bool has_result_ = false;
   bool stop_ = false;
   std::atomic<bool> cancel_{false};
+  std::atomic<bool> waiting_{false};    // a command is submitted: the second searches give way
   std::atomic<long> busy_since_ns_{0};  // steady clock; 0 when idle
   std::atomic<long> completed_{0};
   std::atomic<bool> failed_{false};

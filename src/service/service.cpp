@@ -146,7 +146,7 @@ void Service::locate(Clock::time_point trigger) {
     // The localizer stops taking up candidates a little before the deadline, so that what is
     // in flight and the publishing still fit the budget.
     const auto margin = ms_duration(std::min(5.0, 0.1 * cfg_.service.budget_ms));
-    const LocateOutput& out = locator_.locate(frame_.depth_mm, frame_.camera, deadline - margin);
+    const LocateOutput& out = locator_.locate_to_pick(frame_.depth_mm, frame_.camera, deadline - margin);
     for (const PipeEstimate& e : out.estimates) {
       if (!e.pickable || int(ranked_.size()) >= cfg_.locate.result_cap()) continue;
       Ranked r;
@@ -177,6 +177,13 @@ void Service::locate(Clock::time_point trigger) {
   result_.cycle_ms = clamp_u16(ms_between(trigger, done));
   record_.frame_age_ms = grab == GrabStatus::ok ? ms_between(frame_.captured, done) : 0.0;
   result_.frame_age_ms = clamp_u16(record_.frame_age_ms);
+}
+
+void Service::search_again(const std::atomic<bool>* interrupt) {
+  if (record_.command != std::uint16_t(reg::Command::locate) || record_.grab != GrabStatus::ok) return;
+  const LocateOutput& out = locator_.search_again(interrupt);
+  record_.stages = out.times;
+  record_.accepted = int(out.estimates.size());
 }
 
 void Service::publish_status() {

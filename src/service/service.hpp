@@ -36,6 +36,10 @@ class Service {
   const reg::Result& run(std::uint16_t command, std::uint16_t req_id, Clock::time_point trigger);
   // The status page's board (owned by the caller, outliving the Service); nullptr: none.
   void set_status_board(StatusBoard* board) { board_ = board; }
+  // After the result is published: a LOCATE's second searches (retry_surface_cell_of_d), within
+  // its budget and until *interrupt is set (a command waits); their poses are reported (overlay,
+  // log), never handed out, so the PLC does not wait for them. Adds their time to the record.
+  void search_again(const std::atomic<bool>* interrupt = nullptr);
   // Copies the last command's record and poses to the board (fixed size, no allocation); after
   // the result is published, beside the timing log line.
   void publish_status();

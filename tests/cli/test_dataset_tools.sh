@@ -28,7 +28,7 @@ grep -q "pipes found" "$work/locate.log" || fail "locate logs no summary on stde
 
 "$bin" bench --dataset "$work/ds" --rounds 2 > "$work/bench.txt" 2>&1
 grep -q '2 rounds over the 2 target frames' "$work/bench.txt" || fail "bench header: $(head -1 "$work/bench.txt")"
-for stage in cycle zbuffer normals regions 'ridge_icp\*' 'refine\*' 'verify\*'; do
+for stage in cycle to_pick again zbuffer normals regions 'ridge_icp\*' 'refine\*' 'verify\*'; do
   grep -qE "^${stage} +[0-9.]+ +[0-9.]+ +[0-9.]+$" "$work/bench.txt" || fail "bench prints no median/p95/max for $stage"
 done
 # Every cycle found something on a simulated bin: its median is a positive time.
