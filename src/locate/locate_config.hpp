@@ -105,9 +105,9 @@ struct LocateConfig {
   // Beyond the paper: a region whose ridge fits end in a pose the image does not confirm is
   // searched again, matching the whole top surface of the region instead of its Z-ridge, on
   // cells of this * D (at least ridge_cell_mm; probes on twice that); its poses are reported, never
-  // handed out. 0: off (the default: 0.25 finds 852 of the zoo's 912 top pipes instead of 834, but
-  // costs 1.5x the dev set's cycle median and gives no pick more; docs/experiments.md).
-  double retry_surface_cell_of_d = 0;
+  // handed out, and the service runs these searches after the PLC has its result. 0: off (the zoo's
+  // top pipes found 852 of 912 -> 834; the time to the pick the same; docs/experiments.md).
+  double retry_surface_cell_of_d = 0.25;
   double residual_noise_floor_mm = 0;  // R_th is at least this (set per frame by raise_to_noise, not a key)
   double frame_sigma_mm = 0;           // the frame's measured depth noise (set per frame, not a key)
 
