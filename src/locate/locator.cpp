@@ -281,7 +281,7 @@ void Locator::build_zbuffer_banded(const Image<float>& depth, const CameraInfo& 
 void Locator::candidate_task(const Frame& f, int c, int worker) {
   // f.deadline is the real one less an average candidate: a candidate is only begun if it is
   // expected to end in time (the trace stays "budget" otherwise).
-  if (out_of_time(f.deadline)) return;
+  if (Deadline{f.deadline, cancel_}.passed()) return;
   Worker& wk = workers_[std::size_t(worker)];
   const auto t0 = Clock::now();
   work_candidate(c, wk, f);

@@ -114,9 +114,6 @@ class Locator {
   static int band_begin(int band, int bands, int rows) { return rows * band / bands; }
   void build_zbuffer_banded(const Image<float>& depth, const CameraInfo& camera, const Pose& bin_to_cam);
   void rank();
-  bool out_of_time(Clock::time_point deadline) const {
-    return (cancel_ && cancel_->load(std::memory_order_relaxed)) || Clock::now() >= deadline;
-  }
 
   const PipeModel& model_;
   LocateConfig user_cfg_;  // as configured: keys at 0 are derived (thresholds.hpp)

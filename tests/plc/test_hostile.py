@@ -319,9 +319,11 @@ class ChurnStopped(Hostile):
     # 500 connections that send garbage and close do not wait for a reply: all are queued.
     def test_connects_queued_while_the_service_is_stopped_are_kept(self):
         self.service.proc.send_signal(signal.SIGSTOP)
-        child, q = run_in_child(churn, PORT, 1000, 4)
-        time.sleep(0.5)
-        self.service.proc.send_signal(signal.SIGCONT)
+        try:
+            child, q = run_in_child(churn, PORT, 1000, 4)
+            time.sleep(0.5)
+        finally:
+            self.service.proc.send_signal(signal.SIGCONT)
         total, worst_connect, worst_accept, failures = q.get(timeout=120)
         child.join(10)
         plc = Raw(PORT)
