@@ -30,6 +30,12 @@ inline __m128 distances4(const float* xs, const float* ys, const float* zs, int 
   return _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz));
 }
 
+// The one-at-a-time tail's squared distance from q to point j, summed as distances4() sums it.
+inline float distance2(const float* xs, const float* ys, const float* zs, int j, const Eigen::Vector3f& q) {
+  const float dx = xs[j] - q.x(), dy = ys[j] - q.y(), dz = zs[j] - q.z();
+  return dx * dx + dy * dy + dz * dz;
+}
+
 // Per lane, the least distance so far and the first index at it: a later one replaces it only
 // when strictly closer.
 inline void keep_first_least(__m128 d, __m128i index4, __m128* low4, __m128i* at4) {
@@ -62,6 +68,16 @@ inline void keep_lowest_least(__m128 d, __m128i index4, __m128* low4, __m128i* a
   *at4 = _mm_or_si128(_mm_and_si128(take, index4), _mm_andnot_si128(take, *at4));
 }
 
+// The other side's partners, held in memory for points j..j+3: query i (queries come in order)
+// replaces one only when strictly closer, so ties keep the first.
+inline void keep_first_least_held(__m128 d, __m128i i4, float* held_d2, int* held_to) {
+  __m128 held = _mm_loadu_ps(held_d2);
+  __m128i to = _mm_loadu_si128(reinterpret_cast<const __m128i*>(held_to));
+  keep_first_least(d, i4, &held, &to);
+  _mm_storeu_ps(held_d2, held);
+  _mm_storeu_si128(reinterpret_cast<__m128i*>(held_to), to);
+}
+
 // Partners farther than sqrt(r2) are none: -1 at kFar.
 inline void forget_beyond(float r2, float* d2, int* to, int count) {
   for (int k = 0; k < count; ++k)
@@ -85,8 +101,7 @@ int PointColumns::nearest(const Eigen::Vector3f& q, float* d2) const {
   int best;
   float low = first_least_of_lanes(low4, at4, &best);
   for (; i < n; ++i) {  // the last few lie after every lane's
-    const float dx = xs[i] - q.x(), dy = ys[i] - q.y(), dz = zs[i] - q.z();
-    const float d = dx * dx + dy * dy + dz * dz;
+    const float d = distance2(xs, ys, zs, i, q);
     if (d < low) low = d, best = i;
   }
   *d2 = low;
@@ -109,18 +124,12 @@ void PointColumns::nearest_both_ways(const Eigen::Vector3f* a, int na, int* a_to
     for (; j + 4 <= n; j += 4, index4 = _mm_add_epi32(index4, four)) {
       const __m128 d = distances4(xs, ys, zs, j, qx, qy, qz);
       keep_first_least(d, index4, &low4, &at4);
-      // b's side: a strictly closer a[i] replaces the one held, so ties keep the first
-      __m128 held = _mm_loadu_ps(b_d2 + j);
-      __m128i held_to = _mm_loadu_si128(reinterpret_cast<const __m128i*>(b_to + j));
-      keep_first_least(d, i4, &held, &held_to);
-      _mm_storeu_ps(b_d2 + j, held);
-      _mm_storeu_si128(reinterpret_cast<__m128i*>(b_to + j), held_to);
+      keep_first_least_held(d, i4, b_d2 + j, b_to + j);  // b's side
     }
     int best;
     float low = first_least_of_lanes(low4, at4, &best);
     for (; j < n; ++j) {
-      const float dx = xs[j] - q.x(), dy = ys[j] - q.y(), dz = zs[j] - q.z();
-      const float d = dx * dx + dy * dy + dz * dz;
+      const float d = distance2(xs, ys, zs, j, q);
       if (d < low) low = d, best = j;
       if (d < b_d2[j]) b_d2[j] = d, b_to[j] = i;
     }
@@ -164,17 +173,12 @@ void PointColumns::nearest_both_ways_within(const Eigen::Vector3f* a, int na, fl
     for (; j + 4 <= end; j += 4) {
       const __m128 d = distances4(xs, ys, zs, j, qx, qy, qz);
       keep_lowest_least(d, _mm_loadu_si128(reinterpret_cast<const __m128i*>(index + j)), &low4, &at4);
-      __m128 held = _mm_loadu_ps(held_d2 + j);
-      __m128i to = _mm_loadu_si128(reinterpret_cast<const __m128i*>(held_to + j));
-      keep_first_least(d, i4, &held, &to);  // a[] comes in order: strictly closer keeps the first
-      _mm_storeu_ps(held_d2 + j, held);
-      _mm_storeu_si128(reinterpret_cast<__m128i*>(held_to + j), to);
+      keep_first_least_held(d, i4, held_d2 + j, held_to + j);
     }
     int best;
     float low = first_least_of_lanes(low4, at4, &best);
     for (; j < end; ++j) {
-      const float dx = xs[j] - q.x(), dy = ys[j] - q.y(), dz = zs[j] - q.z();
-      const float d = dx * dx + dy * dy + dz * dz;
+      const float d = distance2(xs, ys, zs, j, q);
       if (d < low || (d == low && index[j] < best)) low = d, best = index[j];
       if (d < held_d2[j]) held_d2[j] = d, held_to[j] = i;
     }

@@ -34,8 +34,8 @@ struct PointColumns {
   // The points sorted along the set's longest side `along_` (0, 1, 2: x, y, z): coordinates,
   // each one's index in x, y, z, the sort's keys, and per sorted point its partner's squared
   // distance and index.
-  std::vector<float> sorted_x_, sorted_y_, sorted_z_, sorted_b_d2_;
   void sort_along();
+  std::vector<float> sorted_x_, sorted_y_, sorted_z_, sorted_b_d2_;
   std::vector<int> sorted_index_, sorted_b_to_;
   std::vector<std::uint64_t> sorted_key_;
   int along_ = 0;

@@ -73,8 +73,8 @@ class RidgeIcp {
   std::vector<Eigen::Vector3f> model_ridge_;  // P_m
   std::vector<Eigen::Vector3f> src_, dst_;    // correspondences
   PointColumns observed_columns_;
-  std::vector<int> model_to_,
-      observed_to_;  // nearest partners both ways (PointColumns::nearest_both_ways_within)
+  // Nearest partners both ways (PointColumns::nearest_both_ways_within).
+  std::vector<int> model_to_, observed_to_;
   std::vector<float> model_d2_, observed_d2_;
   RidgeBuffers ridge_;
 };
