@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <filesystem>
 #include <stdexcept>
 #include <thread>
 
@@ -101,6 +102,33 @@ TEST(CycleRunner, AQueuedLocateGetsItsWholeBudget) {
   EXPECT_GT(service.record().tried, 0);
   EXPECT_GE(service.record().queued_ms, 3100.0);
   EXPECT_GE(service.record().cycle_ms, 3100.0);  // CYCLE_MS: from the PLC's trigger
+}
+
+// The LOCATE a cell stood still on is often the last one before someone stops the service to look
+// at it. Its frame is kept (log.no_pick_frames) even when the stop comes while the cycle thread,
+// the PLC already answered DONE_NONE, is still searching again or drawing.
+TEST(CycleRunner, ALocateWithoutAPickKeepsItsFrameWhenTheServiceStopsRightAfter) {
+  test::TempDir dir;
+  AppConfig cfg = test::sim_config(dir, 1, 21);
+  cfg.source.sim.refill = false;
+  cfg.service.budget_ms = 20000;
+  Service service(cfg, sbend(), std::make_unique<SimSource>(sbend(), cfg.source.sim));
+  CycleRunner runner(service);
+  Published published;
+  for (std::uint16_t id = 1; id <= 3; ++id) {  // the one pipe picked (or not found), then none
+    runner.submit(request(reg::Command::locate, id));
+    const Clock::time_point give_up = Clock::now() + std::chrono::seconds(60);
+    while (!runner.take_result(&published) && Clock::now() < give_up) std::this_thread::yield();
+    ASSERT_EQ(published.ack_id, id);
+    if (published.result.status == reg::Status::done_none) break;
+    ASSERT_TRUE(wait_for(runner, id));
+  }
+  ASSERT_EQ(published.result.status, reg::Status::done_none);
+  runner.stop();  // at once: the PLC has its answer, the records are not written yet
+  int depth_files = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(dir.file("log/no-pick")))
+    depth_files += entry.path().string().find("-depth.png") != std::string::npos;
+  EXPECT_EQ(depth_files, 1);
 }
 
 }  // namespace

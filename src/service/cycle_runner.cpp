@@ -99,7 +99,7 @@ void CycleRunner::run_one(const PlcRequest& req) {
   service_.search_again(&waiting_);
   service_.log().write(service_.record());
   service_.publish_status();
-  if (!cancel_) service_.after_publish();  // shutting down: the simulated bin can stay as it is
+  service_.after_publish(cancel_);
   busy_since_ns_ = 0;
   ++completed_;
 }

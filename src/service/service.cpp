@@ -208,7 +208,7 @@ void Service::write_overlays() {
   auto due = [this](int every) { return every > 0 && cycles_ % std::uint32_t(every) == 0; };
   const bool to_file = due(cfg_.log.overlay_every);
   const bool to_board = board_ && cfg_.status.enabled && due(cfg_.status.overlay_every);
-  const bool no_pick = cfg_.log.no_pick_frames > 0 && ranked_.empty();
+  const bool no_pick = cfg_.log.no_pick_frames > 0 && ranked_.empty() && !record_.cut_by_shutdown;
   if (!to_file && !to_board && !no_pick) return;
   try {
     const Image<Rgb> overlay = draw_locate_overlay(locator_, frame_.depth_mm, frame_.camera);
@@ -262,9 +262,9 @@ void Service::keep_no_pick_frame(const Image<Rgb>& overlay) {
   }
 }
 
-void Service::after_publish() {
+void Service::after_publish(bool shutting_down) {
   write_overlays();
-  if (!pick_pending_) return;
+  if (!pick_pending_ || shutting_down) return;
   pick_pending_ = false;
   if (const Pose* p = presented()) source_->picked(*p);
 }

@@ -46,8 +46,9 @@ class Service {
   // After the result is published (outside the cycle): every log.overlay_every LOCATEs the
   // integrator's picture of the frame is written, every status.overlay_every LOCATEs it goes to
   // the status board, a LOCATE that handed out no pose keeps its frame (log.no_pick_frames), and
-  // the simulated bin loses the pipe handed out.
-  void after_publish();
+  // the simulated bin loses the pipe handed out. Shutting down, the records are still written (the
+  // last LOCATE before a stop is often the one that stood still) but the bin stays as it is.
+  void after_publish(bool shutting_down = false);
   // Stops a running cycle at its next check (shutdown).
   void cancel_cycles(const std::atomic<bool>* flag) {
     cancel_ = flag;
