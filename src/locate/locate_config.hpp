@@ -156,6 +156,9 @@ struct LocateConfig {
   bool pin_slides_by_ends = true;  // a pipe that slides along itself is pickable only where the
                                    // image shows one of its ends, and no end goes on beyond; every
                                    // pipe's ends are read (off: none)
+  bool slides_placed_first = true;  // ... and of two of its hypotheses the image confirms about as
+                                    // well, one its ends place goes before one they show slid
+                                    // (with judge_slides: its slid rivals check the pose put first)
 
   // The paper's comparison: ICP on points sampled from the whole visible surface instead of the
   // Z-ridge (eval-bop --match surface).
@@ -171,7 +174,8 @@ struct LocateConfig {
 };
 
 // The paper's search (IV-B): its six turns in both directions at the measured centre, every one
-// run to convergence, no turns about the vertical, no sliding, no slid rivals, R_th a hard cut.
+// run to convergence, no turns about the vertical, no sliding, no slid rivals (nor poses put
+// first by their ends), R_th a hard cut.
 // The checks after the search (refinement, verification, ambiguity) stay. `--search paper` /
 // [locate] search.
 inline void use_paper_search(LocateConfig* c) {
@@ -181,6 +185,7 @@ inline void use_paper_search(LocateConfig* c) {
   c->icp_probed_states = 2 * c->initial_rotations;
   c->icp_continued_states = c->icp_continued_states_sliding = 2 * c->initial_rotations;
   c->judge_slides = false;
+  c->slides_placed_first = false;
   c->judge_rolls = false;
   c->residual_rescue_of_rth = 1;
   c->short_region_min_extent_of_l = c->region_min_extent_of_l;
