@@ -160,9 +160,9 @@ inline float hypothesis_quality(const Verification& v) {
   return v.agreement() - kFreeSpaceWeight * v.free_space();
 }
 // Whether hypothesis `a` reads the image better than `b` (both of one region): the higher
-// hypothesis_quality, but for a pipe its ends place (`ends_place`: it slides along itself,
-// slides_placed_first), of two the image confirms about as well, one an end pins with none going
-// on beyond goes before one no end pins with the tube going on beyond an end.
+// hypothesis_quality, but for a pipe its ends place (`ends_place`: it slides along itself, its
+// slides are judged and slides_placed_first is on), of two the image confirms about as well, one an
+// end pins with none going on beyond goes before one no end pins with the tube going on beyond an end.
 bool better_reading(const Verification& a, const Verification& b, bool ends_place, const LocateConfig& cfg);
 
 // The deadline a candidate's work stops at (a cancel flag, when set, ends it as well).
