@@ -1,5 +1,6 @@
 #include "model/neighbors.hpp"
 
+#include <cmath>
 #include <flann/flann.hpp>
 #include <limits>
 
@@ -38,6 +39,27 @@ bool KdTree3::nearest(const Eigen::Vector3f& query, int* index, float* dist_sq, 
   *index = -1;
   *dist_sq = std::numeric_limits<float>::infinity();
   return false;
+}
+
+bool KdTree3::nearest_within(const Eigen::Vector3f& query, float radius_mm, int* index,
+                             float* dist_sq) const {
+  *index = -1;
+  *dist_sq = std::numeric_limits<float>::infinity();
+  if (!impl_->index || !query.allFinite() || !(radius_mm >= 0)) return false;
+  int idx = -1;
+  float d2 = 0;
+  flann::Matrix<float> q(const_cast<float*>(query.data()), 1, 3);
+  flann::Matrix<int> idx_m(&idx, 1, 1);
+  flann::Matrix<float> dst(&d2, 1, 1);
+  flann::SearchParams params(flann::FLANN_CHECKS_UNLIMITED);
+  params.max_neighbors = 1;
+  // FLANN keeps distances below the squared radius: the next float up keeps one at it too.
+  const float r2 = std::nextafter(radius_mm * radius_mm, std::numeric_limits<float>::infinity());
+  if (impl_->index->radiusSearch(q, idx_m, dst, r2, params) != 1 || idx < 0 || std::size_t(idx) >= count_)
+    return false;
+  *index = idx;
+  *dist_sq = d2;
+  return true;
 }
 
 int KdTree3::radius(const Eigen::Vector3f& query, float radius_mm, int* indices, float* dists_sq,

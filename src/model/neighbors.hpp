@@ -24,6 +24,11 @@ class KdTree3 {
   // `checks` bounds the leaves visited (FLANN's approximation knob; <= 0 means exact).
   bool nearest(const Eigen::Vector3f& query, int* index, float* dist_sq, int checks = -1) const;
 
+  // Nearest point to query at most radius_mm away; false (index -1, distance infinite) when there
+  // is none. Exact, and much cheaper than nearest() for a query far from every point: the search
+  // prunes at the radius (the symmetry and slide searches land many samples off the surface).
+  bool nearest_within(const Eigen::Vector3f& query, float radius_mm, int* index, float* dist_sq) const;
+
   // All points within radius_mm, written into caller-owned buffers of capacity `max_results`;
   // returns how many were written (closest first).
   int radius(const Eigen::Vector3f& query, float radius_mm, int* indices, float* dists_sq,

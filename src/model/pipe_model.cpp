@@ -259,7 +259,7 @@ Pose refine_half_turn(const SurfaceSamples& surface, const IndexedSurface& index
       const Eigen::Vector3d q = m * surface.points[i * stride].cast<double>();
       int idx = 0;
       float d2 = 0;
-      if (!indexed.tree.nearest(q.cast<float>(), &idx, &d2, 64) || d2 > gate * gate) continue;
+      if (!indexed.tree.nearest_within(q.cast<float>(), gate, &idx, &d2)) continue;
       const Eigen::Vector3d s = surface.points[std::size_t(idx)].cast<double>();
       const Eigen::Vector3d nrm = surface.normals[std::size_t(idx)].cast<double>();
       Eigen::Matrix<double, 6, 1> row;
@@ -293,7 +293,7 @@ struct LandingShare {
   float worst_gap_mm = 0;
 };
 LandingShare landing_share(const SurfaceSamples& surface, const IndexedSurface& indexed, const Pose& m,
-                           std::size_t stride, float tolerance_mm, float spacing_mm) {
+                           std::size_t stride, float tolerance_mm, float spacing_mm, float gap_mm) {
   constexpr int kAround = 8;
   int idx[kAround];
   float d2[kAround];
@@ -303,9 +303,10 @@ LandingShare landing_share(const SurfaceSamples& surface, const IndexedSurface& 
   LandingShare out;
   for (std::size_t i = 0; i < n; ++i) {
     const Eigen::Vector3f q = (m * surface.points[i * stride].cast<double>()).cast<float>();
+    // Farther than `gap_mm` from every sample the search stops: that alone fails the symmetry.
     int nearest = 0;
     float nearest_d2 = 0;
-    const bool landed = indexed.tree.nearest(q, &nearest, &nearest_d2, 64);
+    const bool landed = indexed.tree.nearest_within(q, gap_mm, &nearest, &nearest_d2);
     out.worst_gap_mm = std::max(out.worst_gap_mm, std::sqrt(nearest_d2));
     if (!landed) continue;  // off every sample: not within
     float best =
@@ -342,8 +343,10 @@ std::vector<Pose> find_symmetries(const SurfaceSamples& surface, const Eigen::Ve
     const Pose m = refine_half_turn(surface, indexed, centroid, axis, stride, gate_start, gate_end);
     // Every sample must land on the surface, but for the few at sharp edges (end caps' rims)
     // where the samples' own planes are a mesh-discretisation artefact.
-    const LandingShare share = landing_share(surface, indexed, m, stride, tolerance_mm, spacing_mm);
-    if (share.within < kSymmetryMinShare || share.worst_gap_mm > tolerance_mm + 4 * spacing_mm) continue;
+    const float max_gap_mm = tolerance_mm + 4 * spacing_mm;
+    const LandingShare share =
+        landing_share(surface, indexed, m, stride, tolerance_mm, spacing_mm, max_gap_mm);
+    if (share.within < kSymmetryMinShare || share.worst_gap_mm > max_gap_mm) continue;
     Pose refined = m;
     refined.linear() = nearest_rotation(refined.linear());
     // A refinement that slid to the identity is not a symmetry, nor one that slid to a symmetry
@@ -388,7 +391,7 @@ std::vector<Pose> find_near_symmetries(const SurfaceSamples& surface, const Eige
         const Eigen::Vector3f q = (m * p.cast<double>()).cast<float>();
         int idx = 0;
         float d2 = 0;
-        if (!indexed.tree.nearest(q, &idx, &d2, 64)) continue;
+        if (!indexed.tree.nearest_within(q, std::max(gate, tolerance_mm), &idx, &d2)) continue;
         within += d2 <= tolerance_mm * tolerance_mm;
         if (d2 > gate * gate) continue;
         src.col(pairs) = p.cast<double>();

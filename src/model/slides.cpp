@@ -60,8 +60,8 @@ float landing_share(const SurfaceSamples& surface, const KdTree3& tree, const Po
   for (std::size_t i = 0; i < surface.points.size(); i += stride, ++n) {
     int idx = 0;
     float d2 = 0;
-    tree.nearest((m * surface.points[i].cast<double>()).cast<float>(), &idx, &d2, 64);
-    within += d2 <= tolerance_mm * tolerance_mm;
+    within +=
+        tree.nearest_within((m * surface.points[i].cast<double>()).cast<float>(), tolerance_mm, &idx, &d2);
   }
   return n > 0 ? float(within) / float(n) : 0.0f;
 }
