@@ -388,6 +388,72 @@ TEST(BinAwareVerification, AnEndHiddenUnderAPipeAcrossIsNotShownEnding) {
   EXPECT_EQ(ends(covered, true).ends_seen_ending, 1);
 }
 
+// A pipe that slides along itself is placed by its ends alone. Where nothing is read just beyond
+// an end (a coil's end tucked in the shadow of its own next turn), the image is read 2 D further
+// along the bend (ends_read_further): the floor there pins the end; the tube going on round the
+// bend (the pipe is longer than the pose: a pose slid along it) shows it continued, where a probe
+// on the straight line would have left the tube (0.8 D off it on this bend of 2.5 D) and met the
+// floor.
+TEST(BinAwareVerification, AnEndWithNothingReadJustBeyondIsReadFurtherAlongItsBend) {
+  const LocateConfig cfg;
+  const double d = 20;
+  const PipeModel arc = pipe_of("B200r50", d, "arc"), longer = pipe_of("B300r50", d, "longer arc");
+  const LocatorModel lm = prepare_locator_model(arc, 8, cfg),
+                     lm_longer = prepare_locator_model(longer, 8, cfg);
+  ASSERT_FALSE(lm.slides.empty());
+  const std::vector<Eigen::Vector3f>& line = lm.centreline_points;
+  // The arc's end the longer one goes on beyond: not near either end of the longer one.
+  const auto near_an_end = [&](const Eigen::Vector3f& p) {
+    return (p - lm_longer.centreline_points.front()).norm() < d ||
+           (p - lm_longer.centreline_points.back()).norm() < d;
+  };
+  ASSERT_NE(near_an_end(line.front()), near_an_end(line.back()));
+  const Eigen::Vector3f far_end = near_an_end(line.front()) ? line.back() : line.front();
+  const Eigen::Vector3f inside = near_an_end(line.front()) ? line[line.size() - 4] : line[3];
+  const float tol = float(cfg.verify_tolerance_mm);
+  Intrinsics k;
+  k.width = 640, k.height = 480, k.fx = k.fy = 570, k.cx = 320, k.cy = 240;
+  Pose pose = Pose::Identity();
+  pose.translation() = Eigen::Vector3d(0, 0, 950);
+  // The sensor: the floor 1 m away, the pipe (the arc, or the longer arc it is part of), and no
+  // reading within D/2 of the point a diameter beyond the far end on the line out of the tube.
+  const Eigen::Vector3d tip = pose * far_end.cast<double>();
+  const Eigen::Vector3d out = pose.linear() * (far_end - inside).normalized().cast<double>();
+  const Eigen::Vector2d shadow_px = k.project(tip + d * out);
+  const double shadow_radius_px = 0.5 * d * k.fx / tip.z();
+  const auto scene = [&](const PipeModel& pipe) {
+    ProjectedMesh projected;
+    projected.reserve(pipe.mesh);
+    Image<float> drawn(k.width, k.height, 0.0f);
+    const PixelBox box = render_depth_in_box(pipe.mesh, pose, k, &drawn, &projected);
+    Image<float> depth(k.width, k.height, 1000.0f);
+    for (int y = 0; y < k.height; ++y)
+      for (int x = 0; x < k.width; ++x) {
+        if (x >= box.x0 && x <= box.x1 && y >= box.y0 && y <= box.y1 && drawn.at(x, y) > 0)
+          depth.at(x, y) = drawn.at(x, y);
+        if ((Eigen::Vector2d(x, y) - shadow_px).norm() < shadow_radius_px) depth.at(x, y) = 0;
+      }
+    return depth;
+  };
+  const auto ends = [&](const Image<float>& depth, bool read_further) {
+    Verification v;
+    judge_ends(line, float(d), pose, depth, k, tol, &v, false, read_further);
+    return v;
+  };
+  const Image<float> alone = scene(arc), going_on = scene(longer);
+  // The pipe is the arc: the near end pinned by the floor beyond; the far end read only further on.
+  EXPECT_EQ(ends(alone, false).ends_pinned, 1);
+  EXPECT_EQ(ends(alone, false).ends_continued, 0);
+  EXPECT_EQ(ends(alone, true).ends_pinned, 2);
+  EXPECT_EQ(ends(alone, true).ends_continued, 0);
+  EXPECT_EQ(ends(alone, true).ends_seen_ending, 1);  // read further only: not seen ending outright
+  // The pipe goes on round the bend beyond the far end: shown continued, not pinned.
+  EXPECT_EQ(ends(going_on, false).ends_pinned, 1);
+  EXPECT_EQ(ends(going_on, false).ends_continued, 0);
+  EXPECT_EQ(ends(going_on, true).ends_pinned, 1);
+  EXPECT_EQ(ends(going_on, true).ends_continued, 1);
+}
+
 TEST(BinAwareVerification, NoPoseBelowTheFloor) {
   const PipeModel& model = preset_model("sbend");
   const SimulatedScene s = pile_of(model, 3, 4);

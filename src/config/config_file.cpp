@@ -256,6 +256,7 @@ void read_locate(Section& s, LocateConfig* c) {
   s.real("roll_ambiguity_mm", &c->roll_ambiguity_mm, 0, 1000, "mm");
   s.boolean("judge_slides", &c->judge_slides);
   s.boolean("pin_slides_by_ends", &c->pin_slides_by_ends);
+  s.boolean("ends_read_further", &c->ends_read_further);
   s.boolean("slides_placed_first", &c->slides_placed_first);
   s.integer("max_candidates", &c->max_candidates, 1, 256, "regions");
   s.integer("max_results", &c->max_results, 0, 256, "poses (0: every pose found)");

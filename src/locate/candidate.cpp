@@ -516,10 +516,12 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
     // near twin overshooting the pipe's end under a pipe lying across it was pinned by the floor
     // beyond and taken for the pipe (23-planar of the zoo, 12 bins: 3 wrong picks). Not for
     // sliding pipes, whose ends alone place them: there it costs 17-coil 12 of 51 pipes taken in
-    // 3 bins, with no wrong pick fewer.
+    // 3 bins, with no wrong pick fewer. Their ends are read further along the bend where nothing
+    // is read just beyond them (ends_read_further).
     if (cfg.pin_slides_by_ends)
       judge_ends(lm.centreline_points, lm.tube_d_mm, e.model_to_cam, ctx.depth, ctx.camera,
-                 float(cfg.verify_tolerance_mm), &e.check, lm.slides.empty());
+                 float(cfg.verify_tolerance_mm), &e.check, lm.slides.empty(),
+                 cfg.ends_read_further && !lm.slides.empty());
     if (!std::isnan(ctx.lowest_surface_z_mm))
       e.check.below_floor = share_below(lm.verify_mesh, e.model_to_bin,
                                         ctx.lowest_surface_z_mm - kBelowFloorOfD * lm.tube_d_mm);

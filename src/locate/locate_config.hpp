@@ -156,6 +156,8 @@ struct LocateConfig {
   bool pin_slides_by_ends = true;  // a pipe that slides along itself is pickable only where the
                                    // image shows one of its ends, and no end goes on beyond; every
                                    // pipe's ends are read (off: none)
+  bool ends_read_further = true;   // ... and where nothing is read just beyond a sliding pipe's
+                                   // end, the image is read 2 D beyond along its bend
   bool slides_placed_first = true;  // ... and of two of its hypotheses the image confirms about as
                                     // well, one its ends place goes before one they show slid
                                     // (with judge_slides: its slid rivals check the pose put first)
@@ -186,6 +188,7 @@ inline void use_paper_search(LocateConfig* c) {
   c->icp_continued_states = c->icp_continued_states_sliding = 2 * c->initial_rotations;
   c->judge_slides = false;
   c->slides_placed_first = false;
+  c->ends_read_further = false;
   c->judge_rolls = false;
   c->residual_rescue_of_rth = 1;
   c->short_region_min_extent_of_l = c->region_min_extent_of_l;

@@ -14,6 +14,30 @@ constexpr int kSideStepPx = 2;
 constexpr float kEndProbesOfD[] = {0.75f, 1.25f};
 // ... and the tube's own surface at its tip and this far inside it (tip_must_show).
 constexpr float kTipProbesOfD[] = {0.0f, 0.5f};
+// With read_further, where neither of those probes reads the way the tube would go on, one more
+// this far beyond (shares of D), along the bend the centreline's last D lies on ...
+constexpr float kFurtherProbeOfD = 2.0f;
+// ... taken as straight where it bends on a circle wider than this many D.
+constexpr float kStraightBendOfD = 20.0f;
+
+// Where the centreline, going on beyond its point `end` as it bends on the circle through the
+// points `in`, `mid` and `end`, lies `s_mm` beyond it (model frame; a straight line where the
+// three are (nearly) in line).
+Eigen::Vector3f along_the_bend(const Eigen::Vector3f& in, const Eigen::Vector3f& mid,
+                               const Eigen::Vector3f& end, float s_mm, float d) {
+  const Eigen::Vector3f ab = mid - in, ac = end - in, normal = ab.cross(ac);
+  const float n2 = normal.squaredNorm();
+  if (n2 > 0) {
+    const Eigen::Vector3f centre =
+        in + (ac.squaredNorm() * normal.cross(ab) + ab.squaredNorm() * ac.cross(normal)) / (2 * n2);
+    const float radius = (end - centre).norm();
+    if (radius > 0 && radius < kStraightBendOfD * d) {
+      const Eigen::Vector3f axis = (in - centre).cross(end - centre).normalized();
+      return centre + Eigen::AngleAxisf(s_mm / radius, axis) * (end - centre);
+    }
+  }
+  return end + s_mm * ac.normalized();
+}
 
 // The depth a render drew at (x, y): its image within the box it was drawn in; 0 elsewhere.
 float drawn_mm(const Image<float>& render, const PixelBox& box, int x, int y) {
@@ -131,7 +155,7 @@ Verification verify_pose(const Mesh& mesh, Winding winding, const Pose& model_to
 
 void judge_ends(const std::vector<Eigen::Vector3f>& centreline, float d, const Pose& model_to_cam,
                 const Image<float>& depth, const Intrinsics& k, float tol, Verification* v,
-                bool tip_must_show) {
+                bool tip_must_show, bool read_further) {
   v->ends_pinned = v->ends_continued = v->ends_seen_ending = 0;
   const int n = int(centreline.size());
   if (n < 2) return;
@@ -146,10 +170,9 @@ void judge_ends(const std::vector<Eigen::Vector3f>& centreline, float d, const P
     Eigen::Vector3f out = r * (centreline[end] - centreline[in]);
     if (!(out.norm() > 0.25f * d)) continue;
     out.normalize();
-    // The depth measured where the tube's surface `along` * D beyond the tip (inside it where
-    // negative) faces the camera, and that surface's depth; no reading: 0.
-    const auto probe = [&](float along, float* facing_z) {
-      const Eigen::Vector3f centre = tip + along * d * out;
+    // The depth measured where the tube's surface around the centreline point `centre` faces
+    // the camera, and that surface's depth; no reading: 0.
+    const auto probe_at = [&](const Eigen::Vector3f& centre, float* facing_z) {
       if (!(centre.z() > 0)) return 0.0f;
       const Eigen::Vector3f facing = centre - 0.5f * d * centre.normalized();
       const Eigen::Vector2d px = k.project(facing.cast<double>());
@@ -157,14 +180,38 @@ void judge_ends(const std::vector<Eigen::Vector3f>& centreline, float d, const P
       *facing_z = facing.z();
       return depth.inside(x, y) ? depth.at(x, y) : 0.0f;
     };
+    // ... `along` * D beyond the tip along the tube's way out (inside it where negative).
+    const auto probe = [&](float along, float* facing_z) {
+      return probe_at(tip + along * d * out, facing_z);
+    };
     int free = 0, going_on = 0, probes = 0;
-    for (const float beyond : kEndProbesOfD) {
-      float facing_z = 0;
-      const float zo = probe(beyond, &facing_z);
-      if (!(zo > 0) || zo < facing_z - tol) continue;  // no reading, or something in front
+    const auto read = [&](float zo, float facing_z) {
+      if (!(zo > 0) || zo < facing_z - tol) return;  // no reading, or something in front
       ++probes;
       free += zo > facing_z + tol;
       going_on += zo <= facing_z + tol;
+    };
+    for (const float beyond : kEndProbesOfD) {
+      float facing_z = 0;
+      const float zo = probe(beyond, &facing_z);
+      read(zo, facing_z);
+    }
+    // Beyond the paper: a pipe that slides along itself is placed by its ends alone. Where both
+    // probes read nothing of the way on (a coil's end tucked under its own next turn, in the
+    // shadow of it), the image is read once more, further along the bend the tube would follow
+    // (a coil lying alone on the zoo's bin floor, neither end read, was left ambiguous:
+    // docs/experiments.md, "A sliding pipe's end read further along its bend").
+    bool further_only = false;
+    if (probes == 0 && read_further) {
+      int mid = end;
+      while (mid + step >= 0 && mid + step < n && (centreline[mid] - centreline[end]).norm() < 0.5f * d)
+        mid += step;
+      const Eigen::Vector3f beyond =
+          along_the_bend(centreline[in], centreline[mid], centreline[end], kFurtherProbeOfD * d, d);
+      float facing_z = 0;
+      const float zo = probe_at(r * beyond + t, &facing_z);
+      read(zo, facing_z);
+      further_only = probes > 0;
     }
     if (probes == 0) continue;
     bool tip_hidden = false;
@@ -175,7 +222,7 @@ void judge_ends(const std::vector<Eigen::Vector3f>& centreline, float d, const P
     }
     const bool pinned = free == probes && !(tip_must_show && tip_hidden);
     v->ends_pinned += pinned;
-    v->ends_seen_ending += pinned && !tip_hidden && probes == int(std::size(kEndProbesOfD));
+    v->ends_seen_ending += pinned && !tip_hidden && probes == int(std::size(kEndProbesOfD)) && !further_only;
     v->ends_continued += going_on == probes;
   }
 }

@@ -92,10 +92,13 @@ Verification verify_pose(const Mesh& mesh, Winding winding, const Pose& model_to
 // tolerance_mm is an end the image pins, within it a tube going on. Fills ends_pinned and
 // ends_continued (and ends_seen_ending) of *v. With tip_must_show, an end is pinned only where nothing lies
 // in front of the tube at its tip and half a diameter inside it: an end hidden under another pipe is not
-// shown ending there, whatever lies beyond.
+// shown ending there, whatever lies beyond. With read_further, an end whose two probes read
+// nothing of the way on (no reading, something in front) is read once more, 2 D beyond along the
+// bend its centreline's last D lies on; pinned or continued by that probe alone, it is not seen
+// ending outright.
 void judge_ends(const std::vector<Eigen::Vector3f>& centreline, float d_mm, const Pose& model_to_cam,
                 const Image<float>& depth_mm, const Intrinsics& k, float tolerance_mm, Verification* v,
-                bool tip_must_show = false);
+                bool tip_must_show = false, bool read_further = false);
 // Beyond the paper: two poses told apart by the image. Where their renders (depth in each box,
 // 0 where not drawn) differ by more than tolerance_mm, each pixel speaks for the pose whose
 // surface the sensor measured there, or against one it saw through; rims are left out (lateral
