@@ -287,7 +287,8 @@ Pose refine_half_turn(const SurfaceSamples& surface, const IndexedSurface& index
 // How far each sample lands from the surface under `m`: the least point-to-plane distance to the
 // samples around where it lands (one sample's plane is wrong at a sharp edge, e.g. an end cap's
 // rim, and the gap between samples is no departure from the surface). Returns the share of
-// samples within tolerance_mm and the largest distance to the nearest sample.
+// samples within tolerance_mm and the largest distance to the nearest sample (infinite once a
+// sample lands farther than gap_mm from every sample: the search stops there).
 struct LandingShare {
   float within = 0;
   float worst_gap_mm = 0;
