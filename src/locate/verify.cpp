@@ -163,9 +163,14 @@ void judge_ends(const std::vector<Eigen::Vector3f>& centreline, float d, const P
   const Eigen::Vector3f t = model_to_cam.translation().cast<float>();
   for (int e = 0; e < 2; ++e) {
     const int end = e == 0 ? 0 : n - 1, step = e == 0 ? 1 : -1;
+    // The first centreline point at least `dist` from the end (or the other end).
+    const auto inward = [&](float dist) {
+      int i = end;
+      while (i + step >= 0 && i + step < n && (centreline[i] - centreline[end]).norm() < dist) i += step;
+      return i;
+    };
     // The way out of the tube at this end: from the centreline point about D inside it.
-    int in = end;
-    while (in + step >= 0 && in + step < n && (centreline[in] - centreline[end]).norm() < d) in += step;
+    const int in = inward(d);
     const Eigen::Vector3f tip = r * centreline[end] + t;
     Eigen::Vector3f out = r * (centreline[end] - centreline[in]);
     if (!(out.norm() > 0.25f * d)) continue;
@@ -203,11 +208,8 @@ void judge_ends(const std::vector<Eigen::Vector3f>& centreline, float d, const P
     // docs/experiments.md, "A sliding pipe's end read further along its bend").
     bool further_only = false;
     if (probes == 0 && read_further) {
-      int mid = end;
-      while (mid + step >= 0 && mid + step < n && (centreline[mid] - centreline[end]).norm() < 0.5f * d)
-        mid += step;
-      const Eigen::Vector3f beyond =
-          along_the_bend(centreline[in], centreline[mid], centreline[end], kFurtherProbeOfD * d, d);
+      const Eigen::Vector3f beyond = along_the_bend(centreline[in], centreline[inward(0.5f * d)],
+                                                    centreline[end], kFurtherProbeOfD * d, d);
       float facing_z = 0;
       const float zo = probe_at(r * beyond + t, &facing_z);
       read(zo, facing_z);

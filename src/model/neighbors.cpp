@@ -41,6 +41,22 @@ bool KdTree3::nearest(const Eigen::Vector3f& query, int* index, float* dist_sq, 
   return false;
 }
 
+namespace {
+
+// FLANN's radius search: at most max_results points closer than sqrt(radius_sq), closest first.
+int within(const flann::Index<flann::L2_Simple<float>>& index, const Eigen::Vector3f& query, float radius_sq,
+           int* indices, float* dists_sq, int max_results) {
+  flann::Matrix<float> q(const_cast<float*>(query.data()), 1, 3);
+  flann::Matrix<int> idx(indices, 1, std::size_t(max_results));
+  flann::Matrix<float> dst(dists_sq, 1, std::size_t(max_results));
+  flann::SearchParams params(flann::FLANN_CHECKS_UNLIMITED);
+  params.max_neighbors = max_results;
+  params.sorted = true;
+  return index.radiusSearch(q, idx, dst, radius_sq, params);
+}
+
+}  // namespace
+
 bool KdTree3::nearest_within(const Eigen::Vector3f& query, float radius_mm, int* index,
                              float* dist_sq) const {
   *index = -1;
@@ -48,14 +64,9 @@ bool KdTree3::nearest_within(const Eigen::Vector3f& query, float radius_mm, int*
   if (!impl_->index || !query.allFinite() || !(radius_mm >= 0)) return false;
   int idx = -1;
   float d2 = 0;
-  flann::Matrix<float> q(const_cast<float*>(query.data()), 1, 3);
-  flann::Matrix<int> idx_m(&idx, 1, 1);
-  flann::Matrix<float> dst(&d2, 1, 1);
-  flann::SearchParams params(flann::FLANN_CHECKS_UNLIMITED);
-  params.max_neighbors = 1;
   // FLANN keeps distances below the squared radius: the next float up keeps one at it too.
   const float r2 = std::nextafter(radius_mm * radius_mm, std::numeric_limits<float>::infinity());
-  if (impl_->index->radiusSearch(q, idx_m, dst, r2, params) != 1 || idx < 0 || std::size_t(idx) >= count_)
+  if (within(*impl_->index, query, r2, &idx, &d2, 1) != 1 || idx < 0 || std::size_t(idx) >= count_)
     return false;
   *index = idx;
   *dist_sq = d2;
@@ -65,13 +76,7 @@ bool KdTree3::nearest_within(const Eigen::Vector3f& query, float radius_mm, int*
 int KdTree3::radius(const Eigen::Vector3f& query, float radius_mm, int* indices, float* dists_sq,
                     int max_results) const {
   if (!impl_->index || max_results <= 0) return 0;
-  flann::Matrix<float> q(const_cast<float*>(query.data()), 1, 3);
-  flann::Matrix<int> idx(indices, 1, std::size_t(max_results));
-  flann::Matrix<float> dst(dists_sq, 1, std::size_t(max_results));
-  flann::SearchParams params(flann::FLANN_CHECKS_UNLIMITED);
-  params.max_neighbors = max_results;
-  params.sorted = true;
-  return impl_->index->radiusSearch(q, idx, dst, radius_mm * radius_mm, params);
+  return within(*impl_->index, query, radius_mm * radius_mm, indices, dists_sq, max_results);
 }
 
 }  // namespace pipeloc

@@ -392,7 +392,7 @@ std::vector<Pose> find_near_symmetries(const SurfaceSamples& surface, const Eige
         const Eigen::Vector3f q = (m * p.cast<double>()).cast<float>();
         int idx = 0;
         float d2 = 0;
-        if (!indexed.tree.nearest_within(q, std::max(gate, tolerance_mm), &idx, &d2)) continue;
+        if (!indexed.tree.nearest_within(q, gate, &idx, &d2)) continue;  // gate >= tolerance_mm
         within += d2 <= tolerance_mm * tolerance_mm;
         if (d2 > gate * gate) continue;
         src.col(pairs) = p.cast<double>();
