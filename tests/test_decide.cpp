@@ -209,6 +209,26 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
       // read, an end is pinned.
       {"a third out of the view, what is in view well seen", judged(outside_view(seen(950, 0, 0), 0.35f)),
        true, CandidateOutcome::accepted, false, true, 0.6175f},
+      // ... of what is in view and not under something in front (at most verify_max_occluded).
+      {"a third out of the view, 7 % under another, the rest well seen",
+       ends_read(judged(outside_view(seen(880, 0, 70), 0.35f)), 1, 0, 0, 0), true, CandidateOutcome::accepted,
+       false, true, 0.88f * 0.93f * 0.65f},
+      {"the same, nothing in front: what is in view not well seen",
+       ends_read(judged(outside_view(unread(seen(880, 0, 0), 70), 0.35f)), 1, 0, 0, 0), true,
+       CandidateOutcome::accepted, false, false, 0.88f * 0.65f},
+      {"a third out of the view, a sixth under another", judged(outside_view(seen(840, 0, 160), 0.35f)), true,
+       CandidateOutcome::accepted, false, false, 0.84f * 0.84f * 0.65f},
+      // ... where a pipe that slides along itself shows an end seen ending outright, not pinned
+      // past a hidden tip (what is in view well seen counting what lies in front: the old rule).
+      {"a third out of the view, 7 % under another, sliding, an end seen ending",
+       seen_ending(sliding(ends_read(judged(outside_view(seen(880, 0, 70), 0.35f)), 1, 0, 0, 0), 1, 0), 1), true,
+       CandidateOutcome::accepted, false, true, 0.88f * 0.93f * 0.65f},
+      {"the same, its end pinned past a hidden tip",
+       sliding(ends_read(judged(outside_view(seen(880, 0, 70), 0.35f)), 1, 0, 0, 0), 1, 0), true,
+       CandidateOutcome::accepted, false, false, 0.88f * 0.93f * 0.65f},
+      {"a third out of the view, well seen, sliding, its end pinned past a hidden tip",
+       sliding(ends_read(judged(outside_view(seen(950, 0, 0), 0.35f)), 1, 0, 0, 0), 1, 0), true,
+       CandidateOutcome::accepted, false, true, 0.6175f},
       {"six tenths out of the view", judged(outside_view(seen(1000, 0, 0), 0.6f)), true,
        CandidateOutcome::accepted, false, false, 0.4f},
       {"a third out of the view, ends read, none pinned",

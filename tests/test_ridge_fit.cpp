@@ -197,6 +197,37 @@ TEST(PoseDistance, SharedTubeIsTheShareOfTheCentrelineWhereTheOtherPoseHasIt) {
   EXPECT_LT(shared_tube(lm, beside, a), kRivalMinSharedTube);
 }
 
+// Beyond the paper: two regions' estimates that read one pipe two ways. A J bend's pose reaching
+// out of the view and the same slid 3 D along its long leg share its tube (more than duplicates
+// are apart): confirmed about as well, one pipe read two ways; both wholly in the view, or one
+// clearly better, not; beside it, a neighbour.
+TEST(PoseDistance, TwoEstimatesSharingTheTubeFarApartReadOnePipeTwoWays) {
+  LocateConfig cfg;
+  const LocatorModel lm = prepare_locator_model(pipe_of("S200,B90r40,S100", 20), 8, cfg);
+  const auto& c = lm.centreline_points;
+  ASSERT_GE(c.size(), 16u);
+  const float d = lm.tube_d_mm;
+  PipeEstimate a;
+  a.model_to_bin.translation() = Eigen::Vector3d(10, 20, 30);
+  a.check.model_px = a.check.agree_px = 1000;
+  PipeEstimate slid = a;
+  slid.model_to_bin.translation() += ((c[1] - c[0]).normalized() * 3 * d).cast<double>();
+  slid.check.agree_px = 970;
+  EXPECT_FALSE(read_two_ways(lm, a, slid, cfg));  // both wholly in the view
+  a.check.outside_view = 0.3f;
+  EXPECT_TRUE(read_two_ways(lm, a, slid, cfg));
+  EXPECT_TRUE(read_two_ways(lm, slid, a, cfg));
+  slid.check.agree_px = 900;  // beyond ambiguity_quality_margin
+  EXPECT_FALSE(read_two_ways(lm, a, slid, cfg));
+  PipeEstimate near = a;  // a duplicate: merged, not two readings
+  near.model_to_bin.translation() += ((c[1] - c[0]).normalized() * d).cast<double>();
+  EXPECT_FALSE(read_two_ways(lm, a, near, cfg));
+  const Eigen::Vector3f normal = (c[c.size() / 4] - c[0]).cross(c[3 * c.size() / 4] - c[0]).normalized();
+  PipeEstimate beside = a;  // further than duplicates, sharing none of the tube
+  beside.model_to_bin.translation() += (3 * d * normal).cast<double>();
+  EXPECT_FALSE(read_two_ways(lm, a, beside, cfg));
+}
+
 // Beyond the paper: the turns judged about a pipe's own length. An elbow has three quarter turns
 // about the principal axis of its centreline, which each keep the centreline's centroid and axis
 // in place and four of which are no turn; a straight tube (the same pick turned) and an arc (placed

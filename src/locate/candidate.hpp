@@ -39,6 +39,9 @@ constexpr float kFreeSpaceWeight = 2.0f;
 // share of its centreline lies within D/2 of the best's: readings of one pipe share 0.56-1.0 of it
 // on the zoo, hypotheses on a neighbouring pipe none.
 constexpr float kRivalMinSharedTube = 0.25f;
+// Two poses within this * D of each other that share kRivalMinSharedTube of the tube are one
+// pipe's (Locator::merge_estimate keeps one of them).
+constexpr float kSamePipeOfD = 2.0f;
 // An ambiguous estimate keeps half its score: it ranks below a sure one of about the same cover.
 constexpr float kAmbiguousScoreFactor = 0.5f;
 // A rival is told apart where at least kMinTellingPx pixels speak for the best and at most
@@ -164,6 +167,13 @@ inline float hypothesis_quality(const Verification& v) {
 // slides are judged and slides_placed_first is on), of two the image confirms about as well, one an
 // end pins with none going on beyond goes before one no end pins with the tube going on beyond an end.
 bool better_reading(const Verification& a, const Verification& b, bool ends_place, const LocateConfig& cfg);
+// Beyond the paper: two estimates of different regions that put the tube in one place over at
+// least kRivalMinSharedTube of it, further apart than one pipe's duplicates, the image confirming
+// them about as well, one of them reaching out of the view: one pipe read two ways
+// (rivals_across_regions). Wholly in the view, each was checked on all of the pipe and judged
+// against its own rivals.
+bool read_two_ways(const LocatorModel& lm, const PipeEstimate& a, const PipeEstimate& b,
+                   const LocateConfig& cfg);
 
 // The deadline a candidate's work stops at (a cancel flag, when set, ends it as well).
 struct Deadline {

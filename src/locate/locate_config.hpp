@@ -137,9 +137,12 @@ struct LocateConfig {
   double verify_max_outside_view = 0.3;    // share of the model's vertices outside the image (and
                                            // agreement * (1 - this share) >= verify_min_agreement)
   double verify_max_outside_view_well_seen = 0.5;  // ... or up to this share where what is in view
-  double verify_well_seen_agreement = 0.9;         // ... agrees this well (and, where the ends
-                                                   // are read, one end is pinned); an ambiguous
-                                                   // pose further out of view is no estimate
+  double verify_well_seen_agreement = 0.9;         // ... agrees this well (or what of it lies
+                                                   // under nothing in front, a sliding pipe then
+                                                   // showing an end seen ending; and, where the
+                                                   // ends are read, one end is pinned); an
+                                                   // ambiguous pose further out of view is no
+                                                   // estimate
   double side_drop_of_d = 0.25;            // a pipe's surroundings lie at least this * D beyond its silhouette ...
   double verify_max_side_level = 0.3;      // ... but for at most this share (more: a smooth blob, not a pipe)
   int verify_hypotheses = 3;               // distinct ridge fits refined and checked per region
@@ -151,6 +154,8 @@ struct LocateConfig {
   bool judge_rolls = true;        // the found pose turned about the pipe's own length by quarter turns
   double roll_ambiguity_mm = 5;   // ... a turn the image confirms as well that moves the pick further
                                   // than this (the pick-correct tolerance): ambiguous
+  bool rivals_across_regions = true;  // two regions' estimates that read one pipe two ways, the
+                                      // image confirming both about as well: both ambiguous
   bool judge_slides = true;  // the found pose slid along the pipe itself (an arc about its centre,
                              // a coil along its helix, a straight run along its axis) is a rival too
   bool pin_slides_by_ends = true;  // a pipe that slides along itself is pickable only where the

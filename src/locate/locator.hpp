@@ -107,6 +107,7 @@ class Locator {
   void search_regions_again(const Frame& f, int n, const std::atomic<bool>* interrupt);
   void search_region_again(int c, Worker& wk, const Frame& f, const std::atomic<bool>* interrupt);
   void merge_estimate(int c);
+  void mark_pipes_read_two_ways();
   // Candidates of what the accepted poses of candidates [0, n) left of their regions, worked
   // before the deadline (leftover_regions).
   void leftover_candidates(const Frame& f, int n);
