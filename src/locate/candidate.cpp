@@ -193,10 +193,8 @@ bool read_two_ways(const LocatorModel& lm, const PipeEstimate& a, const PipeEsti
   if ((ca - cb).norm() > 2.0 * double(lm.extent_l_mm) + double(lm.tube_d_mm)) return false;
   const float same_pipe_mm = kSamePipeOfD * lm.tube_d_mm;
   if (pose_distance_mm(lm, a.model_to_bin, b.model_to_bin, same_pipe_mm) <= same_pipe_mm) return false;
-  if (shared_tube(lm, a.model_to_bin, b.model_to_bin) < kRivalMinSharedTube &&
-      shared_tube(lm, b.model_to_bin, a.model_to_bin) < kRivalMinSharedTube)
-    return false;
-  return as_good(a.check, b.check, cfg) && as_good(b.check, a.check, cfg);
+  return share_the_tube(lm, a.model_to_bin, b.model_to_bin) && as_good(a.check, b.check, cfg) &&
+         as_good(b.check, a.check, cfg);
 }
 
 bool turn_may_replace(const Verification& turned, const Verification& found) {

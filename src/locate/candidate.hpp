@@ -42,6 +42,10 @@ constexpr float kRivalMinSharedTube = 0.25f;
 // Two poses within this * D of each other that share kRivalMinSharedTube of the tube are one
 // pipe's (Locator::merge_estimate keeps one of them).
 constexpr float kSamePipeOfD = 2.0f;
+// Whether one of two poses puts at least kRivalMinSharedTube of its tube where the other has it.
+inline bool share_the_tube(const LocatorModel& lm, const Pose& a, const Pose& b) {
+  return shared_tube(lm, a, b) >= kRivalMinSharedTube || shared_tube(lm, b, a) >= kRivalMinSharedTube;
+}
 // An ambiguous estimate keeps half its score: it ranks below a sure one of about the same cover.
 constexpr float kAmbiguousScoreFactor = 0.5f;
 // A rival is told apart where at least kMinTellingPx pixels speak for the best and at most

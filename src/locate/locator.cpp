@@ -329,9 +329,7 @@ void Locator::merge_estimate(int c) {
   for (auto& other : out_.estimates) {
     const float same_pipe_mm = kSamePipeOfD * lm_.tube_d_mm;
     if (pose_distance_mm(lm_, other.model_to_bin, e.model_to_bin, same_pipe_mm) > same_pipe_mm) continue;
-    if (shared_tube(lm_, e.model_to_bin, other.model_to_bin) < kRivalMinSharedTube &&
-        shared_tube(lm_, other.model_to_bin, e.model_to_bin) < kRivalMinSharedTube)
-      continue;
+    if (!share_the_tube(lm_, e.model_to_bin, other.model_to_bin)) continue;
     // A pose of the second search (never handed out) does not take the place of the first
     // search's, nor keep its own against one: a coil's pickable pose gave way to a second search's
     // agreeing better (17-coil, 3 bins: 59 -> 52 pipes taken).
