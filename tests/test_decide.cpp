@@ -181,9 +181,21 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
        false, true, 0.9f},
       {"accepted under another pipe", judged(seen(800, 0, 200)), true, CandidateOutcome::accepted, false,
        false, 0.64f},
-      // Found by the second search of a region: reported, never handed out.
-      {"searched again", searched_again(judged(seen(1000, 0, 0))), true, CandidateOutcome::accepted, false,
-       false, 1.0f},
+      // Found by the second search of a region: reported; handed out (where the first searches
+      // hand out none: LocateOutput::pick()) only where the image confirms 0.9 of what is in view
+      // and its sides are read dropping away.
+      {"searched again, its sides not read", searched_again(judged(seen(1000, 0, 0))), true,
+       CandidateOutcome::accepted, false, false, 1.0f},
+      {"searched again, well seen, sides dropping away", searched_again(judged(with_sides(seen(950, 0, 0), 100, 10))),
+       true, CandidateOutcome::accepted, false, true, 0.95f},
+      {"searched again, agreeing under 0.9", searched_again(judged(with_sides(seen(890, 0, 0), 100, 10))), true,
+       CandidateOutcome::accepted, false, false, 0.89f},
+      {"searched again, too few side pixels to judge",
+       searched_again(judged(with_sides(seen(950, 0, 0), kMinSidePx - 1, 0))), true, CandidateOutcome::accepted,
+       false, false, 0.95f},
+      {"searched again, 0.9 of what is in view, a fifth out of it",
+       searched_again(judged(with_sides(outside_view(seen(950, 0, 0), 0.2f), 100, 10))), true,
+       CandidateOutcome::accepted, false, true, 0.76f},
       // A pose both its ends are seen ending (the tip shown, every probe beyond read and lower) is
       // confirmed on the pixels the sensor read, at least verify_min_read_share (half) of them
       // counted; the score still counts the unread ones as not confirmed.
@@ -410,6 +422,10 @@ TEST(Decide, ThresholdsComeFromTheConfig) {
   EXPECT_EQ(decide(half_read, cfg).outcome, CandidateOutcome::accepted);  // 450 of 500 counted
   cfg.verify_min_read_share = 1;  // off: unread pixels count against the pose
   EXPECT_EQ(decide(half_read, cfg).outcome, CandidateOutcome::not_confirmed);
+  const Evidence again = searched_again(judged(with_sides(seen(950, 0, 0), 100, 10)));
+  EXPECT_TRUE(decide(again, cfg).pickable);
+  cfg.second_search_may_pick = false;  // off: the second searches' poses are never handed out
+  EXPECT_FALSE(decide(again, cfg).pickable);
 }
 
 // A pose turned about the pipe's length takes the found one's place only where the image shows

@@ -231,6 +231,7 @@ void read_locate(Section& s, LocateConfig* c) {
   s.real("residual_max_of_d", &c->residual_max_of_d, 0.01, 5, "x D");
   s.real("residual_rescue_of_rth", &c->residual_rescue_of_rth, 1, 10, "x R_th (1: off)");
   s.real("retry_surface_cell_of_d", &c->retry_surface_cell_of_d, 0, 2, "x D (0: off)");
+  s.boolean("second_search_may_pick", &c->second_search_may_pick);
   s.integer("refine_iterations", &c->refine_iterations, 0, 200, "iterations");
   s.real("refine_inlier_mm", &c->refine_inlier_mm, 0, 50, "mm (0: derived)");
   s.integer("refine_max_points", &c->refine_max_points, 50, 100000, "points");

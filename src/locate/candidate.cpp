@@ -308,12 +308,16 @@ Decision decide(const Evidence& given, const LocateConfig& cfg) {
   const bool unplaced_in_view =
       e.ends_judged && e.has_ends && !e.model_slides && !(e.best.outside_view > 0) && e.best.ends_pinned == 0;
   // ... and a pose the second search of a region found, after the ridge's fits were not confirmed,
-  // is reported but never handed out: matched by its shape, a thin short elbow flipped end for end
-  // fits its region as well (a wrong pick agreeing 0.98 while clearing 3 bins of 04-elbow, with the
-  // second search's poses held to an agreement of 0.9), and on real frames without pipes it fits
-  // clutter (3 more picks, agreeing 0.74-0.86).
+  // is handed out only where the first searches hand out none (LocateOutput::pick()), and only
+  // where the image confirms verify_well_seen_agreement of what is in view and shows its sides
+  // dropping away on at least kMinSidePx pixels: matched by its shape, a thin short elbow flipped
+  // end for end fits its region as well (a wrong pick agreeing 0.98 while clearing 3 bins of
+  // 04-elbow, where it could take a first search's place), and on real frames without pipes such
+  // poses fit clutter, agreeing 0.74-0.86, or 0.94 on a 64-pixel elbow with 17 side pixels.
+  const bool second_search_placed =
+      cfg.second_search_may_pick && !(e.best.agreement() < well_seen_share) && e.best.side_px >= kMinSidePx;
   out.pickable = !out.ambiguous && e.best.occluded() <= float(cfg.verify_max_occluded) && checked_in_view &&
-                 !ends_go_on && !unplaced_in_view && !e.searched_again;
+                 !ends_go_on && !unplaced_in_view && (!e.searched_again || second_search_placed);
   return out;
 }
 
@@ -746,6 +750,7 @@ bool work_candidate(const CandidateContext& ctx, const CandidateInput& in, const
   estimate->ambiguous = decision.ambiguous;
   estimate->score = decision.score;
   estimate->pickable = decision.pickable;
+  estimate->searched_again = in.searched_again;
   return true;
 }
 

@@ -66,6 +66,7 @@ struct PipeEstimate {
   bool ambiguous = false;  // another pose of the model fits about as well (torus-like pipes)
   bool pickable = false;   // accepted, not lying under another pipe, not ambiguous
   int candidate = -1;      // index of its candidate region
+  bool searched_again = false;  // found by its region's second search: picked only if no other is
 };
 
 // Why a candidate did not become an estimate.

@@ -104,10 +104,15 @@ struct LocateConfig {
                                         // judged by the image instead (1: off, the paper's cut)
   // Beyond the paper: a region whose ridge fits end in a pose the image does not confirm is
   // searched again, matching the whole top surface of the region instead of its Z-ridge, on
-  // cells of this * D (at least ridge_cell_mm; probes on twice that); its poses are reported, never
-  // handed out, and the service runs these searches after the PLC has its result. 0: off (the zoo's
-  // top pipes found 852 of 912 -> 834; the time to the pick the same; docs/experiments.md).
+  // cells of this * D (at least ridge_cell_mm; probes on twice that); the service runs these
+  // searches after the PLC has its result. 0: off (the zoo's top pipes found 852 of 912 -> 834;
+  // the time to the pick the same; docs/experiments.md).
   double retry_surface_cell_of_d = 0.25;
+  // ... their poses are reported, and handed out only where the first searches hand out none:
+  // the cycle then waits for them, and a pose of theirs is pickable only where the image confirms
+  // verify_well_seen_agreement of what is in view and its sides drop away (judged on enough side
+  // pixels). Off: never handed out.
+  bool second_search_may_pick = true;
   double residual_noise_floor_mm = 0;  // R_th is at least this (set per frame by raise_to_noise, not a key)
   double frame_sigma_mm = 0;           // the frame's measured depth noise (set per frame, not a key)
 
@@ -199,6 +204,7 @@ inline void use_paper_search(LocateConfig* c) {
   c->short_region_min_extent_of_l = c->region_min_extent_of_l;
   c->leftover_regions = false;
   c->retry_surface_cell_of_d = 0;
+  c->second_search_may_pick = false;
 }
 
 }  // namespace pipeloc

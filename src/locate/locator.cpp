@@ -165,6 +165,14 @@ const LocateOutput& Locator::locate_to_pick(const Image<float>& frame_depth, con
   }
   if (cfg_.rivals_across_regions) mark_pipes_read_two_ways();
   rank();
+  // Beyond the paper: where the first searches hand out no pose, the second searches may
+  // (second_search_may_pick): they run now, before the result, and their poses are judged with
+  // the others' across regions.
+  if (cfg_.second_search_may_pick && out_.pick() < 0 && !out_.budget_exhausted && searches_again_ > 0) {
+    search_again();
+    if (cfg_.rivals_across_regions) mark_pipes_read_two_ways();
+    rank();
+  }
   out_.times.total_ms = ms_since(t_start);
   return out_;
 }
@@ -174,8 +182,9 @@ const LocateOutput& Locator::locate_to_pick(const Image<float>& frame_depth, con
 // per cross-section, places a short pipe or a short piece of one by a few points (an 8.4 mm
 // elbow's region: 8-20), and its fits end turned or flipped; the surface holds the region's
 // shape. Only for regions the ridge search failed on: for every region, the surface's fits lose
-// long pipes (docs/experiments.md). Its poses are reported, never handed out (decide()): the
-// second searches come after the pick, in the time the frame's deadline leaves.
+// long pipes (docs/experiments.md). Its poses are reported, and handed out only where the first
+// searches hand out none (decide(), LocateOutput::pick()): the second searches come after the
+// pick, in the time the frame's deadline leaves, or, where there is no pick, before it.
 const LocateOutput& Locator::search_again(const std::atomic<bool>* interrupt) {
   const int n = searches_again_;
   if (n == 0) return out_;

@@ -32,10 +32,16 @@ struct LocateOutput {
   float lowest_surface_z_mm = 0;  // bin frame: the floor where it is seen (no pose lies below it)
   PixelBox view;  // the pixels the sensor reads: the image less its edges' dead bands (read_view)
   bool budget_exhausted = false;
+  // The pose handed to the PLC: the best pickable of the first searches; only where they have
+  // none, the best pickable of the second searches (second_search_may_pick). -1: none.
   int pick() const {
-    for (std::size_t i = 0; i < estimates.size(); ++i)
-      if (estimates[i].pickable) return int(i);
-    return -1;
+    int again = -1;
+    for (std::size_t i = 0; i < estimates.size(); ++i) {
+      if (!estimates[i].pickable) continue;
+      if (!estimates[i].searched_again) return int(i);
+      if (again < 0) again = int(i);
+    }
+    return again;
   }
 };
 
@@ -49,12 +55,14 @@ class Locator {
   const LocateOutput& locate(const Image<float>& depth_mm, const CameraInfo& camera,
                              Clock::time_point deadline = Clock::time_point::max());
   // Every search whose poses may be handed out: the pick (output().pick()) is final when it
-  // returns. depth_mm and camera must live until search_again() has run.
+  // returns. Where the first searches hand out none, that includes the second searches
+  // (second_search_may_pick). depth_mm and camera must live until search_again() has run.
   const LocateOutput& locate_to_pick(const Image<float>& depth_mm, const CameraInfo& camera,
                                      Clock::time_point deadline = Clock::time_point::max());
   // The second searches of that frame (retry_surface_cell_of_d) before its deadline or until
   // *interrupt is set (the service: the PLC's next command waits), their poses merged and ranked
-  // with the others: reported, never handed out, so the pick does not move.
+  // with the others: reported, never handed out, so the pick does not move (where there was none,
+  // locate_to_pick() has run them already).
   const LocateOutput& search_again(const std::atomic<bool>* interrupt = nullptr);
 
   // A flag that, once set, ends a cycle as if its deadline had passed (the service's shutdown).
