@@ -172,6 +172,9 @@ const LocateOutput& Locator::locate_to_pick(const Image<float>& frame_depth, con
     search_again();
     if (cfg_.rivals_across_regions) mark_pipes_read_two_ways();
     rank();
+    // Still no pick, and the deadline ended a second search: the budget ran out before the
+    // image was searched (ERROR 3, not DONE_NONE).
+    if (out_.pick() < 0 && !again_complete_) out_.budget_exhausted = true;
   }
   out_.times.total_ms = ms_since(t_start);
   return out_;
@@ -190,7 +193,7 @@ const LocateOutput& Locator::search_again(const std::atomic<bool>* interrupt) {
   if (n == 0) return out_;
   searches_again_ = 0;  // once per frame
   const auto t = Clock::now();
-  search_regions_again(frame_, n, interrupt);
+  again_complete_ = search_regions_again(frame_, n, interrupt);
   for (const Worker& wk : workers_) add_candidate_times(wk.retry_buf.times, &out_.times);
   for (int k = 0; k < n; ++k) {  // in the candidates' order, as the first searches were merged
     const int c = to_search_again_[std::size_t(k)];
@@ -404,17 +407,19 @@ void Locator::work_candidate(int c, Worker& wk, const Frame& f) {
     to_search_again_[std::size_t(searches_again_++)] = c;
 }
 
-void Locator::search_regions_again(const Frame& f, int n, const std::atomic<bool>* interrupt) {
+bool Locator::search_regions_again(const Frame& f, int n, const std::atomic<bool>* interrupt) {
   std::sort(to_search_again_.begin(), to_search_again_.begin() + n);  // in the candidates' order
-  std::atomic<int> next{0};
+  std::atomic<int> next{0}, done{0};
   pool_.run(pool_.size(), [&](int, int worker) {
     for (int k = next++; k < n; k = next++)
       if (!Deadline{f.deadline, cancel_, interrupt}.passed())
-        search_region_again(to_search_again_[std::size_t(k)], workers_[std::size_t(worker)], f, interrupt);
+        done += search_region_again(to_search_again_[std::size_t(k)], workers_[std::size_t(worker)], f,
+                                    interrupt);
   });
+  return done == n;
 }
 
-void Locator::search_region_again(int c, Worker& wk, const Frame& f, const std::atomic<bool>* interrupt) {
+bool Locator::search_region_again(int c, Worker& wk, const Frame& f, const std::atomic<bool>* interrupt) {
   const CandidateContext again = context(retry_starts_, retry_cfg_, f);
   CandidateInput surface = candidate_input(c);
   Eigen::Vector3f* const ridge = surface.ridge;
@@ -430,6 +435,7 @@ void Locator::search_region_again(int c, Worker& wk, const Frame& f, const std::
     trace = retried;
     std::copy_n(wk.retry_ridge.begin(), retried.ridge_count, ridge);
   }
+  return retried.outcome != CandidateOutcome::budget;
 }
 
 }  // namespace pipeloc

@@ -112,8 +112,9 @@ class Locator {
   void work_candidate(int c, Worker& wk, const Frame& f);
   // The second search of the first n regions listed, on their whole top surface, before the
   // deadline (retry_surface_cell_of_d); of one region.
-  void search_regions_again(const Frame& f, int n, const std::atomic<bool>* interrupt);
-  void search_region_again(int c, Worker& wk, const Frame& f, const std::atomic<bool>* interrupt);
+  // Each returns whether the search ran to its end (the deadline or *interrupt did not end it).
+  bool search_regions_again(const Frame& f, int n, const std::atomic<bool>* interrupt);
+  bool search_region_again(int c, Worker& wk, const Frame& f, const std::atomic<bool>* interrupt);
   void merge_estimate(int c);
   void mark_pipes_read_two_ways();
   // Candidates of what the accepted poses of candidates [0, n) left of their regions, worked
@@ -140,6 +141,7 @@ class Locator {
   bool retry_on_surface_ = false;
   std::vector<int> to_search_again_;    // candidates whose first search was not confirmed ...
   std::atomic<int> searches_again_{0};  // ... this many this frame
+  bool again_complete_ = true;          // the last search_again() searched every one of them
   Frame frame_{};                       // the frame locate_to_pick() worked, for search_again()
   Clock::time_point frame_start_{};     // when its locate_to_pick() began
   ZBuffer zb_;
