@@ -169,12 +169,14 @@ const LocateOutput& Locator::locate_to_pick(const Image<float>& frame_depth, con
   // (second_search_may_pick): they run now, before the result, and their poses are judged with
   // the others' across regions.
   if (cfg_.second_search_may_pick && out_.pick() < 0 && !out_.budget_exhausted && searches_again_ > 0) {
-    search_again();
-    if (cfg_.rivals_across_regions) mark_pipes_read_two_ways();
-    rank();
+    const bool searched_to_the_end = second_searches(nullptr);
+    if (cfg_.rivals_across_regions) {
+      mark_pipes_read_two_ways();
+      rank();
+    }
     // Still no pick, and the deadline ended a second search: the budget ran out before the
     // image was searched (ERROR 3, not DONE_NONE).
-    if (out_.pick() < 0 && !again_complete_) out_.budget_exhausted = true;
+    if (out_.pick() < 0 && !searched_to_the_end) out_.budget_exhausted = true;
   }
   out_.times.total_ms = ms_since(t_start);
   return out_;
@@ -189,11 +191,16 @@ const LocateOutput& Locator::locate_to_pick(const Image<float>& frame_depth, con
 // searches hand out none (decide(), LocateOutput::pick()): the second searches come after the
 // pick, in the time the frame's deadline leaves, or, where there is no pick, before it.
 const LocateOutput& Locator::search_again(const std::atomic<bool>* interrupt) {
+  second_searches(interrupt);
+  return out_;
+}
+
+bool Locator::second_searches(const std::atomic<bool>* interrupt) {
   const int n = searches_again_;
-  if (n == 0) return out_;
+  if (n == 0) return true;
   searches_again_ = 0;  // once per frame
   const auto t = Clock::now();
-  again_complete_ = search_regions_again(frame_, n, interrupt);
+  const bool to_the_end = search_regions_again(frame_, n, interrupt);
   for (const Worker& wk : workers_) add_candidate_times(wk.retry_buf.times, &out_.times);
   for (int k = 0; k < n; ++k) {  // in the candidates' order, as the first searches were merged
     const int c = to_search_again_[std::size_t(k)];
@@ -202,7 +209,7 @@ const LocateOutput& Locator::search_again(const std::atomic<bool>* interrupt) {
   rank();
   out_.times.again_ms = ms_since(t);
   out_.times.total_ms = ms_since(frame_start_);
-  return out_;
+  return to_the_end;
 }
 
 // 7. Rank: best score first; the first pickable one is the pick handed to the PLC.
@@ -342,11 +349,10 @@ void Locator::merge_estimate(int c) {
     const float same_pipe_mm = kSamePipeOfD * lm_.tube_d_mm;
     if (pose_distance_mm(lm_, other.model_to_bin, e.model_to_bin, same_pipe_mm) > same_pipe_mm) continue;
     if (!share_the_tube(lm_, e.model_to_bin, other.model_to_bin)) continue;
-    // A pose of the second search (never handed out) does not take the place of the first
-    // search's, nor keep its own against one: a coil's pickable pose gave way to a second search's
-    // agreeing better (17-coil, 3 bins: 59 -> 52 pipes taken).
-    const bool again = trace.searched_again,
-               other_again = out_.traces[std::size_t(other.candidate)].searched_again;
+    // A pose of the second search (picked only where the first searches pick none) does not take
+    // the place of the first search's, nor keep its own against one: a coil's pickable pose gave
+    // way to a second search's agreeing better (17-coil, 3 bins: 59 -> 52 pipes taken).
+    const bool again = e.searched_again, other_again = other.searched_again;
     const bool keep_other = again != other_again
                                 ? again
                                 : (other.check.agreement() >= e.check.agreement() || c >= first_leftover_);
@@ -366,7 +372,8 @@ void Locator::merge_estimate(int c) {
 // rival of the other's: what tells them apart may lie out of the view. Such a pair is ambiguous:
 // neither is handed out (23-planar of the zoo: a 442 mm J bend 42 % out of the view read 270 mm
 // round its bend by one region and right by another, the first handed out while clearing). The
-// first searches' estimates only: the pick is handed out before the second searches end.
+// first searches' estimates, and the second searches' too where those run before the pick
+// (second_search_may_pick): after a pick, the second searches' poses are never handed out.
 void Locator::mark_pipes_read_two_ways() {
   auto& es = out_.estimates;
   for (std::size_t i = 0; i < es.size(); ++i)

@@ -115,6 +115,9 @@ class Locator {
   // Each returns whether the search ran to its end (the deadline or *interrupt did not end it).
   bool search_regions_again(const Frame& f, int n, const std::atomic<bool>* interrupt);
   bool search_region_again(int c, Worker& wk, const Frame& f, const std::atomic<bool>* interrupt);
+  // search_again()'s work: the regions listed searched again, their poses merged and ranked;
+  // whether every one ran to its end (true where none was listed).
+  bool second_searches(const std::atomic<bool>* interrupt);
   void merge_estimate(int c);
   void mark_pipes_read_two_ways();
   // Candidates of what the accepted poses of candidates [0, n) left of their regions, worked
@@ -141,7 +144,6 @@ class Locator {
   bool retry_on_surface_ = false;
   std::vector<int> to_search_again_;    // candidates whose first search was not confirmed ...
   std::atomic<int> searches_again_{0};  // ... this many this frame
-  bool again_complete_ = true;          // the last search_again() searched every one of them
   Frame frame_{};                       // the frame locate_to_pick() worked, for search_again()
   Clock::time_point frame_start_{};     // when its locate_to_pick() began
   ZBuffer zb_;
