@@ -1,6 +1,8 @@
 // decide(): every outcome a candidate's evidence can give, one row each, at the default config.
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "locate/candidate.hpp"
 
 namespace pipeloc {
@@ -426,6 +428,38 @@ TEST(Decide, ThresholdsComeFromTheConfig) {
   EXPECT_TRUE(decide(again, cfg).pickable);
   cfg.second_search_may_pick = false;  // off: the second searches' poses are never handed out
   EXPECT_FALSE(decide(again, cfg).pickable);
+}
+
+// A pose is handed out only where the sensor resolves the tube: its relief (0.223 R, RMS) over the
+// pixels confirming it, against the frame's measured noise, at least pick_min_relief_sigmas. 38
+// pixels of a 20 mm tube: 6.9 sigmas at 2 mm of noise, 2.7 at 5 mm.
+TEST(Decide, APoseIsHandedOutOnlyWhereTheSensorResolvesTheTube) {
+  Verification small;
+  small.model_px = small.inner_px = 40;
+  small.agree_px = 38;
+  EXPECT_NEAR(tube_relief_sigmas(small, kD, 5), std::sqrt(38.0) * 0.223 * 10 / 5, 1e-3);
+  LocateConfig cfg;
+  cfg.frame_noise_mm = 2;
+  Decision d = decide(judged(small), cfg);
+  EXPECT_EQ(d.outcome, CandidateOutcome::accepted);
+  EXPECT_TRUE(d.pickable);
+  EXPECT_FALSE(d.unresolved);
+  cfg.frame_noise_mm = 5;
+  d = decide(judged(small), cfg);
+  EXPECT_EQ(d.outcome, CandidateOutcome::accepted);  // still reported, with its score
+  EXPECT_FLOAT_EQ(d.score, 0.95f);
+  EXPECT_FALSE(d.pickable);
+  EXPECT_TRUE(d.unresolved);
+  // A pose not pickable for another reason is not "unresolved": the noise is not what holds it.
+  Verification covered = small;
+  covered.agree_px = 30, covered.occluded_px = 10;
+  d = decide(judged(covered), cfg);
+  EXPECT_FALSE(d.pickable);
+  EXPECT_FALSE(d.unresolved);
+  cfg.pick_min_relief_sigmas = 0;  // off
+  d = decide(judged(small), cfg);
+  EXPECT_TRUE(d.pickable);
+  EXPECT_FALSE(d.unresolved);
 }
 
 // A pose turned about the pipe's length takes the found one's place only where the image shows

@@ -56,7 +56,9 @@ Json estimate_json(const PipeEstimate& e, int rank, bool pick) {
             {"refine_inliers", e.refine_inliers},
             {"refine_points", e.refine_points},
             {"refine_rms_mm", e.refine_rms_mm},
-            {"model_px", e.check.model_px}};
+            {"model_px", e.check.model_px},
+            {"relief_sigmas", e.relief_sigmas},
+            {"unresolved", e.unresolved}};
   j.update(verification_json(e.check));
   return j;
 }

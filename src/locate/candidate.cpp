@@ -316,9 +316,24 @@ Decision decide(const Evidence& given, const LocateConfig& cfg) {
   // poses fit clutter, agreeing 0.74-0.86, or 0.94 on a 64-pixel elbow with 17 side pixels.
   const bool second_search_placed =
       cfg.second_search_may_pick && !(e.best.agreement() < well_seen_share) && e.best.side_px >= kMinSidePx;
-  out.pickable = !out.ambiguous && e.best.occluded() <= float(cfg.verify_max_occluded) && checked_in_view &&
-                 !ends_go_on && !unplaced_in_view && (!e.searched_again || second_search_placed);
+  const bool placed = !out.ambiguous && e.best.occluded() <= float(cfg.verify_max_occluded) &&
+                      checked_in_view && !ends_go_on && !unplaced_in_view &&
+                      (!e.searched_again || second_search_placed);
+  // ... and only where the sensor resolves the tube (pick_min_relief_sigmas): a thin short elbow a
+  // metre under an active-stereo sensor, its tube 1.3 sigmas of the noise in radius, agrees 0.9 at
+  // poses 5-27 mm off (13 picks, 1 right; docs/experiments.md).
+  const bool resolved =
+      !(cfg.pick_min_relief_sigmas > 0) ||
+      tube_relief_sigmas(e.best, e.tube_d_mm, float(cfg.frame_noise_mm)) >= float(cfg.pick_min_relief_sigmas);
+  out.pickable = placed && resolved;
+  out.unresolved = placed && !resolved;
   return out;
+}
+
+float tube_relief_sigmas(const Verification& check, float tube_d_mm, float noise_mm) {
+  constexpr float kTopReliefRmsOfRadius = 0.223f;  // sqrt(2/3 - (pi/4)^2): sqrt(R^2 - x^2) on [-R, R]
+  if (!(noise_mm > 0)) return 1e30f;
+  return std::sqrt(float(check.agree_px)) * kTopReliefRmsOfRadius * 0.5f * tube_d_mm / noise_mm;
 }
 
 void reserve_candidate(CandidateBuffers* buf, const LocatorModel& lm, const StartSet& starts,
@@ -750,6 +765,9 @@ bool work_candidate(const CandidateContext& ctx, const CandidateInput& in, const
   estimate->ambiguous = decision.ambiguous;
   estimate->score = decision.score;
   estimate->pickable = decision.pickable;
+  estimate->unresolved = decision.unresolved;
+  estimate->relief_sigmas =
+      tube_relief_sigmas(taken.check, evidence.tube_d_mm, float(ctx.cfg.frame_noise_mm));
   estimate->searched_again = in.searched_again;
   return true;
 }

@@ -67,7 +67,14 @@ struct PipeEstimate {
   bool pickable = false;   // accepted, not lying under another pipe, not ambiguous
   int candidate = -1;      // index of its candidate region
   bool searched_again = false;  // found by its region's second search: picked only if no other is
+  float relief_sigmas = 0;      // the tube's relief against the frame's noise (tube_relief_sigmas)
+  bool unresolved = false;      // pickable but for that relief (pick_min_relief_sigmas)
 };
+
+// How plainly the image shows a tube at a pose: the RMS by which a tube's top departs from the
+// plane through it (0.223 R over its width, seen from above), summed in quadrature over the pixels
+// confirming the pose, in sigmas of the frame's depth noise: sqrt(agree_px) 0.223 R / sigma.
+float tube_relief_sigmas(const Verification& check, float tube_d_mm, float noise_mm);
 
 // Why a candidate did not become an estimate.
 enum class CandidateOutcome {
@@ -118,6 +125,7 @@ struct Decision {
   bool pickable = false;
   float score = 0;
   bool rival_taken = false;  // the rival, not the best, is the pipe (its ends shown where they are)
+  bool unresolved = false;   // pickable but for the tube's relief against the noise
 };
 
 // The outcome of a candidate from its evidence: the first check it fails (in the order of the

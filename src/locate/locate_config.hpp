@@ -115,6 +115,7 @@ struct LocateConfig {
   bool second_search_may_pick = true;
   double residual_noise_floor_mm = 0;  // R_th is at least this (set per frame by raise_to_noise, not a key)
   double frame_sigma_mm = 0;           // the frame's measured depth noise (set per frame, not a key)
+  double frame_noise_mm = 0;           // ... not capped as the thresholds' is (set per frame, not a key)
 
   // Beyond the paper: surface refinement, verification, ambiguity.
   int refine_iterations = 12;
@@ -150,6 +151,12 @@ struct LocateConfig {
                                                    // estimate
   double side_drop_of_d = 0.25;            // a pipe's surroundings lie at least this * D beyond its silhouette ...
   double verify_max_side_level = 0.3;      // ... but for at most this share (more: a smooth blob, not a pipe)
+  // Beyond the paper: a pose is handed out only where the sensor resolves the tube: its relief (a
+  // tube's top departs from the plane through it by 0.223 R, RMS over its width), summed over the
+  // pixels confirming the pose, is at least this many sigmas of the frame's measured noise. A thin
+  // short elbow at 1 m under an active-stereo sensor is not (1.9 sigma: 13 picks, 1 right); the
+  // zoo's right picks show 5.4 sigma and more (docs/experiments.md). 0: off.
+  double pick_min_relief_sigmas = 3;
   int verify_hypotheses = 3;               // distinct ridge fits refined and checked per region
   double ambiguity_pose_mm = 10;           // two fits further apart than this (MSSD) ...
   double ambiguity_quality_margin = 0.05;  // ... both confirmed within this margin: ambiguous

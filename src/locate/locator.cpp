@@ -382,7 +382,7 @@ void Locator::mark_pipes_read_two_ways() {
       for (PipeEstimate* e : {&es[i], &es[j]}) {
         if (!e->ambiguous) e->score *= kAmbiguousScoreFactor;
         e->ambiguous = true;
-        e->pickable = false;
+        e->pickable = e->unresolved = false;
       }
     }
 }

@@ -124,6 +124,7 @@ void set_frame_thresholds(const LocateConfig& user, float d, const DepthNoise& n
     cfg->refine_inlier_mm = std::max(kRefineInlierOfSigma * sigma, kRefineInlierOfD * double(d));
   cfg->residual_noise_floor_mm = user.raise_to_noise ? kResidualOfSigma * sigma : 0.0;
   cfg->frame_sigma_mm = sigma;
+  cfg->frame_noise_mm = noise.sigma_mm;
   if (user.normal_window_mm <= 0) {
     const double footprint_mm = double(noise.depth_mm) / std::max(1.0, camera.fx);
     const double sample_mm = std::max(cfg->zbuffer_pixel_mm, footprint_mm);
@@ -134,7 +135,7 @@ void set_frame_thresholds(const LocateConfig& user, float d, const DepthNoise& n
 
 bool derives_from_frame(const LocateConfig& user) {
   return user.continuity_step_max_mm <= 0 || user.verify_tolerance_mm <= 0 || user.refine_inlier_mm <= 0 ||
-         user.normal_window_mm <= 0 || user.raise_to_noise;
+         user.normal_window_mm <= 0 || user.raise_to_noise || user.pick_min_relief_sigmas > 0;
 }
 
 float max_refine_inlier_mm(const LocateConfig& user, float d) {

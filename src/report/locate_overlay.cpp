@@ -47,7 +47,7 @@ void draw_legend(Image<Rgb>* img) {
   };
   const Entry entries[] = {{kPick, "PICK: POSE HANDED TO THE PLC"},
                            {kOutline, "POSE, PICKABLE (R<RANK> <SCORE> OK)"},
-                           {kOther, "POSE, NOT PICKABLE (NO)"},
+                           {kOther, "POSE, NOT PICKABLE (NO, NOISY: UNRESOLVED)"},
                            {kCore, "CORE REGION (UPWARD NORMALS)"},
                            {kRegion, "CANDIDATE REGION (GROWN)"},
                            {kAxis, "PRINCIPAL DIRECTION"},
@@ -173,9 +173,10 @@ Image<Rgb> draw_locate_overlay(const Locator& loc, const Image<float>& depth, co
         cam.intrinsics.project(e.model_to_cam * loc.locator_model().centroid.cast<double>());
     char text[48];
     std::snprintf(text, sizeof text, "%sR%d %.2f%s", i == pick ? "PICK " : "", i, e.score,
-                  i == pick    ? ""
-                  : e.pickable ? " OK"
-                               : " NO");
+                  i == pick      ? ""
+                  : e.pickable   ? " OK"
+                  : e.unresolved ? " NOISY"
+                                 : " NO");
     draw_label(&img, int(c.x()) + 12, int(c.y()) - 16, text,
                i == pick    ? kPick
                : e.pickable ? kOutline

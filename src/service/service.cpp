@@ -169,6 +169,7 @@ void Service::locate(Clock::time_point trigger) {
     } else {
       result_.status = reg::Status::done_none;
       result_.error = reg::Error::none;
+      warn_unresolved(out);
     }
   }
   const Clock::time_point done = Clock::now();
@@ -199,6 +200,24 @@ void Service::publish_status() {
       poses[n].cam_xyz_mm = {t.x(), t.y(), t.z()};
     }
   board_->publish_command(record_, result_.index, poses, n);
+}
+
+// A cell that stands still because its sensor does not resolve the pipe (pick_min_relief_sigmas)
+// says so, with what would change it: the first such LOCATE, then every 100th.
+void Service::warn_unresolved(const LocateOutput& out) {
+  float relief = -1;
+  for (const PipeEstimate& e : out.estimates)
+    if (e.unresolved) relief = std::max(relief, e.relief_sigmas);
+  if (relief < 0 || unresolved_cycles_++ % 100 != 0) return;
+  const LocateConfig& cfg = locator_.config();
+  spdlog::warn(
+      "LOCATE {}: DONE_NONE, though a pipe was found: the sensor does not resolve its tube ({:.1f} mm): "
+      "relief "
+      "{:.1f} sigmas of the depth noise ({:.1f} mm at {:.0f} mm), under pick_min_relief_sigmas {:.1f}; "
+      "mount the camera nearer or use a sensor with less noise ({} LOCATEs so far handed out nothing for "
+      "this)",
+      cycles_, locator_.locator_model().tube_d_mm, relief, cfg.frame_noise_mm, out.noise.depth_mm,
+      cfg.pick_min_relief_sigmas, unresolved_cycles_);
 }
 
 // The integrator's picture of the last LOCATE: drawn once when the log, the status page or the

@@ -76,6 +76,7 @@ class Service {
   void present(int index);
   void write_overlays();
   void keep_no_pick_frame(const Image<Rgb>& overlay);
+  void warn_unresolved(const LocateOutput& out);
 
   const AppConfig& cfg_;
   std::unique_ptr<FrameSource> source_;
@@ -87,6 +88,7 @@ class Service {
   int index_ = -1;
   bool pick_pending_ = false;
   std::uint32_t cycles_ = 0;
+  std::uint32_t unresolved_cycles_ = 0;  // LOCATEs that handed out nothing only for the noise
   const std::atomic<bool>* cancel_ = nullptr;
   StatusBoard* board_ = nullptr;
   reg::Result result_;
