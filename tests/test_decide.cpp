@@ -456,6 +456,9 @@ TEST(Decide, APoseIsHandedOutOnlyWhereTheSensorResolvesTheTube) {
   d = decide(judged(covered), cfg);
   EXPECT_FALSE(d.pickable);
   EXPECT_FALSE(d.unresolved);
+  cfg.frame_noise_mm = 0;  // no noise known: nothing to hold the pose back for
+  EXPECT_TRUE(decide(judged(small), cfg).pickable);
+  cfg.frame_noise_mm = 5;
   cfg.pick_min_relief_sigmas = 0;  // off
   d = decide(judged(small), cfg);
   EXPECT_TRUE(d.pickable);

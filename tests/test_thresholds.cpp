@@ -89,6 +89,17 @@ TEST(Thresholds, FollowTheTubeAndTheNoiseUnlessGiven) {
   set_frame_thresholds(pinned, 40, DepthNoise{3.0f, 1000, 100000}, k, &in_effect);
   EXPECT_EQ(in_effect.verify_tolerance_mm, 5);
   EXPECT_EQ(in_effect.hole_fill_mm, 3);
+  // The pick's check of the tube's relief (pick_min_relief_sigmas) reads the noise as measured,
+  // beyond the cap of the thresholds' own, and has the frame's noise measured even where every
+  // other key is given.
+  set_frame_thresholds(pinned, 40, DepthNoise{6.0f, 1000, 100000}, k, &in_effect);
+  EXPECT_EQ(in_effect.frame_noise_mm, 6.0);
+  EXPECT_LT(in_effect.frame_sigma_mm, 6.0);
+  LocateConfig given = pinned;
+  given.continuity_step_max_mm = 8, given.refine_inlier_mm = 4, given.normal_window_mm = 7;
+  EXPECT_TRUE(derives_from_frame(given));
+  given.pick_min_relief_sigmas = 0;
+  EXPECT_FALSE(derives_from_frame(given));
 }
 
 // R_th is 0.35 D unless the frame's noise needs more: a 12 mm tube under 4 mm of noise (an

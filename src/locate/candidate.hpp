@@ -64,7 +64,7 @@ struct PipeEstimate {
   float refine_rms_mm = 0;
   Verification check;
   bool ambiguous = false;  // another pose of the model fits about as well (torus-like pipes)
-  bool pickable = false;   // accepted, not lying under another pipe, not ambiguous
+  bool pickable = false;   // accepted, not lying under another pipe, not ambiguous, its tube resolved
   int candidate = -1;      // index of its candidate region
   bool searched_again = false;  // found by its region's second search: picked only if no other is
   float relief_sigmas = 0;      // the tube's relief against the frame's noise (tube_relief_sigmas)

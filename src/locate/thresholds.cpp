@@ -15,9 +15,8 @@ constexpr int kDepthBins = 1000;  // up to 10 m
 // the median: a quantised sensor's differences take a few discrete values, and their median jumps.
 constexpr float kKeptShare = 0.8f;
 constexpr float kTrimmedMeanOfSigma = 1.368f;
-// A frame with fewer valid neighbour triples says little of its noise: the sensor model of
-// DESIGN.md at 1 m (Kinect class) stands in.
-constexpr int kMinNoiseSamples = 500;
+// Where the frame says too little of its noise (kMinNoiseSamples), the sensor model of DESIGN.md
+// at 1 m (Kinect class) stands in.
 constexpr float kFallbackSigmaMm = 2.0f, kFallbackDepthMm = 1000.0f;
 
 // Model-derived (shares of D), chosen so that the paper's 16-20 mm tubes keep the values they

@@ -20,6 +20,9 @@ struct DepthNoise {
   int samples = 0;  // second differences measured
 };
 
+// A frame with fewer valid neighbour triples says little of its noise: a fallback stands in.
+constexpr int kMinNoiseSamples = 500;
+
 // Working memory of measure_depth_noise, sized once.
 struct NoiseHistograms {
   std::vector<int> second_difference;  // |z(i-1) - 2 z(i) + z(i+1)| in kSecondDifferenceBinMm bins

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <cstring>
 #include <iterator>
 #include <vector>
 
@@ -55,7 +56,9 @@ void draw_legend(Image<Rgb>* img) {
                            {kFloor, "FLOOR SEEN BETWEEN PIPES (NO CANDIDATE)"},
                            {kViewEdge, "EDGE OF THE VIEW (NO DEPTH READ BEYOND)"}};
   const int scale = 1, line = 9, x0 = 4, y0 = 4;
-  const int w = 8 + 4 * scale * 42, h = line * int(std::size(entries)) + 4;
+  std::size_t longest = 0;
+  for (const Entry& e : entries) longest = std::max(longest, std::strlen(e.text));
+  const int w = 15 + 4 * scale * int(longest) + 3, h = line * int(std::size(entries)) + 4;
   for (int y = y0; y < y0 + h; ++y)
     for (int x = x0; x < x0 + w; ++x)
       if (img->inside(x, y)) img->at(x, y) = {20, 20, 20};

@@ -13,6 +13,7 @@
 #include "io/bop.hpp"
 #include "io/json_file.hpp"
 #include "io/png.hpp"
+#include "locate/thresholds.hpp"
 #include "model/make_pipe.hpp"
 #include "report/locate_overlay.hpp"
 #include "sim/sensor.hpp"
@@ -161,6 +162,7 @@ void Service::locate(Clock::time_point trigger) {
     record_.accepted = int(out.estimates.size());
     record_.cut_by_shutdown = out.budget_exhausted && cancel_ && cancel_->load();
     record_.budget_exhausted = out.budget_exhausted && !record_.cut_by_shutdown;
+    note_unresolved(out);
     if (!ranked_.empty()) {
       present(0);
     } else if (out.budget_exhausted) {
@@ -169,7 +171,6 @@ void Service::locate(Clock::time_point trigger) {
     } else {
       result_.status = reg::Status::done_none;
       result_.error = reg::Error::none;
-      warn_unresolved(out);
     }
   }
   const Clock::time_point done = Clock::now();
@@ -203,21 +204,33 @@ void Service::publish_status() {
 }
 
 // A cell that stands still because its sensor does not resolve the pipe (pick_min_relief_sigmas)
-// says so, with what would change it: the first such LOCATE, then every 100th.
-void Service::warn_unresolved(const LocateOutput& out) {
-  float relief = -1;
+// says so, with what would change it: the first such LOCATE after a pick, then every 100th.
+void Service::note_unresolved(const LocateOutput& out) {
+  unresolved_ = Unresolved{};
+  if (!ranked_.empty()) unresolved_cycles_ = 0;
+  if (!ranked_.empty() || out.budget_exhausted) return;
   for (const PipeEstimate& e : out.estimates)
-    if (e.unresolved) relief = std::max(relief, e.relief_sigmas);
-  if (relief < 0 || unresolved_cycles_++ % 100 != 0) return;
-  const LocateConfig& cfg = locator_.config();
+    if (e.unresolved && e.relief_sigmas > unresolved_.relief_sigmas) {
+      unresolved_.relief_sigmas = e.relief_sigmas;
+      unresolved_.depth_mm = float(e.model_to_cam.translation().norm());
+    }
+  unresolved_.noise_mm = float(locator_.config().frame_noise_mm);
+  unresolved_.noise_measured = out.noise.samples >= kMinNoiseSamples;
+}
+
+void Service::warn_unresolved() {
+  if (unresolved_.relief_sigmas < 0) return;
+  const Unresolved u = unresolved_;
+  unresolved_ = Unresolved{};  // once per LOCATE (a NEXT after it publishes too)
+  if (unresolved_cycles_++ % 100 != 0) return;
   spdlog::warn(
-      "LOCATE {}: DONE_NONE, though a pipe was found: the sensor does not resolve its tube ({:.1f} mm): "
-      "relief "
-      "{:.1f} sigmas of the depth noise ({:.1f} mm at {:.0f} mm), under pick_min_relief_sigmas {:.1f}; "
-      "mount the camera nearer or use a sensor with less noise ({} LOCATEs so far handed out nothing for "
-      "this)",
-      cycles_, locator_.locator_model().tube_d_mm, relief, cfg.frame_noise_mm, out.noise.depth_mm,
-      cfg.pick_min_relief_sigmas, unresolved_cycles_);
+      "LOCATE {}: DONE_NONE, though a pipe was found {:.0f} mm from the camera: the sensor does not resolve "
+      "its {:.1f} mm tube there (relief {:.1f} sigmas of the depth noise, {:.1f} mm {}; [locate] "
+      "pick_min_relief_sigmas {:.1f}): mount the camera nearer or use a sensor with less noise ({} such "
+      "LOCATEs since the last pick)",
+      cycles_, u.depth_mm, locator_.locator_model().tube_d_mm, u.relief_sigmas, u.noise_mm,
+      u.noise_measured ? "measured" : "assumed: too few readings to measure",
+      locator_.config().pick_min_relief_sigmas, unresolved_cycles_);
 }
 
 // The integrator's picture of the last LOCATE: drawn once when the log, the status page or the
@@ -282,6 +295,7 @@ void Service::keep_no_pick_frame(const Image<Rgb>& overlay) {
 }
 
 void Service::after_publish(bool shutting_down) {
+  warn_unresolved();
   write_overlays();
   if (!pick_pending_ || shutting_down) return;
   pick_pending_ = false;

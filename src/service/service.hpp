@@ -76,7 +76,8 @@ class Service {
   void present(int index);
   void write_overlays();
   void keep_no_pick_frame(const Image<Rgb>& overlay);
-  void warn_unresolved(const LocateOutput& out);
+  void note_unresolved(const LocateOutput& out);
+  void warn_unresolved();
 
   const AppConfig& cfg_;
   std::unique_ptr<FrameSource> source_;
@@ -88,7 +89,16 @@ class Service {
   int index_ = -1;
   bool pick_pending_ = false;
   std::uint32_t cycles_ = 0;
-  std::uint32_t unresolved_cycles_ = 0;  // LOCATEs that handed out nothing only for the noise
+  // The last LOCATE handed out nothing, but found a pose the sensor does not resolve
+  // (pick_min_relief_sigmas): logged after the PLC has its result.
+  struct Unresolved {
+    float relief_sigmas = -1;  // of the best such pose; -1: none
+    float depth_mm = 0;        // its distance from the camera
+    float noise_mm = 0;        // the frame's noise
+    bool noise_measured = false;
+  };
+  Unresolved unresolved_;
+  std::uint32_t unresolved_cycles_ = 0;  // such LOCATEs since the last pick
   const std::atomic<bool>* cancel_ = nullptr;
   StatusBoard* board_ = nullptr;
   reg::Result result_;
