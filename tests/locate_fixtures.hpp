@@ -132,6 +132,17 @@ inline SimulatedScene thin_elbow_pile(const PipeModel& model, unsigned seed) {
   return simulate_scene(model, p, rng);
 }
 
+// `pipes` of them under the stereo sensor looking straight down from min_mm-max_mm above the floor.
+inline SimulatedScene thin_elbows_below_stereo(const PipeModel& model, int pipes, double min_mm,
+                                               double max_mm, std::mt19937& rng) {
+  SceneParams p;
+  p.pile.pipes = pipes;
+  p.camera_height_min_mm = min_mm, p.camera_height_max_mm = max_mm;
+  p.max_tilt_deg = 0;
+  p.sensor = sensor_model("stereo");
+  return simulate_scene(model, p, rng);
+}
+
 // A straight model lying with its long axis along the world direction yaw_deg (0: X), its middle
 // over (x, y) and its axis axis_z_mm above the floor.
 inline Pose lying_straight(const PipeModel& model, double yaw_deg, double x, double y, double axis_z_mm) {

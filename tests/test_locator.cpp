@@ -527,12 +527,8 @@ TEST(Locator, ALoneThinElbowTheRidgeFitsMissIsPickedFromItsSecondSearch) {
   std::mt19937 rng(11);
   constexpr int kImages = 30;
   for (int image = 0; image < kImages; ++image) {
-    SceneParams p;  // one elbow on the floor, the stereo sensor 0.65-0.72 m up (as 04-elbow of the zoo)
-    p.pile.pipes = 1;
-    p.camera_height_min_mm = 650, p.camera_height_max_mm = 720;
-    p.max_tilt_deg = 0;
-    p.sensor = sensor_model("stereo");
-    const SimulatedScene s = simulate_scene(model, p, rng);
+    // One elbow on the floor, the sensor 0.65-0.72 m up (as 04-elbow of the zoo).
+    const SimulatedScene s = thin_elbows_below_stereo(model, 1, 650, 720, rng);
     Locator a(model, reported, s.camera.intrinsics), b(model, by_default, s.camera.intrinsics);
     const LocateOutput& first = a.locate_to_pick(s.depth_mm, s.camera);
     const int pa = first.pick();
@@ -572,12 +568,7 @@ TEST(Locator, AThinElbowTheSensorDoesNotResolveIsNotHandedOut) {
   std::mt19937 rng(7);
   constexpr int kImages = 16;
   for (int image = 0; image < kImages; ++image) {
-    SceneParams p;
-    p.pile.pipes = 2;
-    p.camera_height_min_mm = 1000, p.camera_height_max_mm = 1070;
-    p.max_tilt_deg = 0;
-    p.sensor = sensor_model("stereo");
-    const SimulatedScene s = simulate_scene(model, p, rng);
+    const SimulatedScene s = thin_elbows_below_stereo(model, 2, 1000, 1070, rng);
     Locator a(model, by_default, s.camera.intrinsics), b(model, unchecked, s.camera.intrinsics);
     const LocateOutput& out = a.locate_to_pick(s.depth_mm, s.camera);
     picks += out.pick() >= 0;
