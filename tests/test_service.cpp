@@ -8,6 +8,7 @@
 #include <thread>
 
 #include "io/png.hpp"
+#include "locate_fixtures.hpp"
 #include "model/make_pipe.hpp"
 #include "model/stl.hpp"
 #include "score/mssd.hpp"
@@ -601,6 +602,34 @@ TEST(Service, SecondSearchesComeAfterTheResultAndChangeNothingHandedOut) {
   EXPECT_GT(searched_again, 0) << "no LOCATE searched a region again: the test shows nothing";
 }
 
+// A pipe the sensor does not resolve (pick_min_relief_sigmas): two thin short elbows a metre
+// under the stereo sensor. The PLC gets DONE_NONE, never a pose; the timing log counts the poses
+// held back for the noise.
+TEST(Service, APipeTheSensorDoesNotResolveIsNotHandedOut) {
+  test::TempDir dir;
+  AppConfig cfg = test::sim_config(dir, 2, 7);
+  cfg.source.sim.sensor = "stereo";
+  cfg.source.sim.camera_height_min_mm = 1000, cfg.source.sim.camera_height_max_mm = 1070;
+  const PipeModel elbow = thin_elbow();
+  Service service(cfg, elbow, std::make_unique<SimSource>(elbow, cfg.source.sim));
+  int unresolved = 0;
+  constexpr int kLocates = 8;
+  for (int i = 0; i < kLocates; ++i) {
+    const reg::Result& r = service.run(1, std::uint16_t(i + 1), Clock::now());
+    EXPECT_EQ(r.status, reg::Status::done_none) << "LOCATE " << i;
+    unresolved += service.record().unresolved;
+    service.log().write(service.record());
+  }
+  EXPECT_GT(unresolved, 0) << "no pose held back for the noise: the test shows nothing";
+  std::istringstream in(test::read_text(service.log().path()));
+  int logged = 0;
+  for (std::string line; std::getline(in, line);) {
+    const nlohmann::json j = nlohmann::json::parse(line);
+    if (j["event"] == "cycle") logged += j["unresolved"].get<int>();
+  }
+  EXPECT_EQ(logged, unresolved);
+}
+
 TEST(Service, TimingLogHasALinePerCycleAndSummaries) {
   SimService s(6);
   for (int i = 0; i < 6; ++i) {
@@ -620,7 +649,7 @@ TEST(Service, TimingLogHasALinePerCycleAndSummaries) {
       ++cycles;
       for (const char* key : {"trigger_unix_ms", "frame_age_ms", "grab_ms", "zbuffer_ms", "normals_ms",
                               "regions_ms", "ridge_icp_ms", "locate_ms", "again_ms", "cycle_ms", "candidates",
-                              "tried", "status", "score", "budget_use"})
+                              "tried", "unresolved", "status", "score", "budget_use"})
         EXPECT_TRUE(j.contains(key)) << key;
       EXPECT_GE(j["again_ms"].get<double>(), 0.0);
       if (j["cmd"] == 1) {

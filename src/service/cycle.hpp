@@ -23,6 +23,7 @@ struct CycleRecord {
   const char* frame_check = "";  // which check a frame_invalid frame failed (static text)
   int candidates = 0, tried = 0, accepted = 0;  // regions, regions worked, estimates
   int count = 0;                                // poses handed out (pickable, ranked)
+  int unresolved = 0;  // estimates pickable but for the tube's relief against the noise
   float score = 0;                              // of the pose presented
   bool budget_exhausted = false;
   bool cut_by_shutdown = false;  // stopped by SIGTERM/SIGINT/SIGHUP, not by the budget

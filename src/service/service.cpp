@@ -207,6 +207,7 @@ void Service::publish_status() {
 // says so, with what would change it: the first such LOCATE after a pick, then every 100th.
 void Service::note_unresolved(const LocateOutput& out) {
   unresolved_ = Unresolved{};
+  for (const PipeEstimate& e : out.estimates) record_.unresolved += e.unresolved;
   if (!ranked_.empty()) unresolved_cycles_ = 0;
   if (!ranked_.empty() || out.budget_exhausted) return;
   for (const PipeEstimate& e : out.estimates)
