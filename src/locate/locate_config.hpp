@@ -154,7 +154,7 @@ struct LocateConfig {
   // Beyond the paper: a pose is handed out only where the sensor resolves the tube: its relief (a
   // tube's top departs from the plane through it by 0.223 R, RMS over its width), summed over the
   // pixels confirming the pose, is at least this many sigmas of the frame's measured noise. A thin
-  // short elbow at 1 m under an active-stereo sensor is not (1.9 sigma: 13 picks, 1 right); the
+  // short elbow at 1 m under an active-stereo sensor is not (1.4-1.9 sigmas: 13 picks, 1 right); the
   // zoo's right picks show 5.4 sigma and more (docs/experiments.md). 0: off.
   double pick_min_relief_sigmas = 3;
   int verify_hypotheses = 3;               // distinct ridge fits refined and checked per region
