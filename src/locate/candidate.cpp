@@ -322,9 +322,9 @@ Decision decide(const Evidence& given, const LocateConfig& cfg) {
   // ... and only where the sensor resolves the tube (pick_min_relief_sigmas): a thin short elbow a
   // metre under an active-stereo sensor, its tube 1.3 sigmas of the noise in radius, agrees 0.9 at
   // poses 5-27 mm off (13 picks, 1 right; docs/experiments.md).
+  out.relief_sigmas = tube_relief_sigmas(e.best, e.tube_d_mm, float(cfg.frame_noise_mm));
   const bool resolved =
-      !(cfg.pick_min_relief_sigmas > 0) ||
-      tube_relief_sigmas(e.best, e.tube_d_mm, float(cfg.frame_noise_mm)) >= float(cfg.pick_min_relief_sigmas);
+      !(cfg.pick_min_relief_sigmas > 0) || out.relief_sigmas >= float(cfg.pick_min_relief_sigmas);
   out.pickable = placed && resolved;
   out.unresolved = placed && !resolved;
   return out;
@@ -766,8 +766,7 @@ bool work_candidate(const CandidateContext& ctx, const CandidateInput& in, const
   estimate->score = decision.score;
   estimate->pickable = decision.pickable;
   estimate->unresolved = decision.unresolved;
-  estimate->relief_sigmas =
-      tube_relief_sigmas(taken.check, evidence.tube_d_mm, float(ctx.cfg.frame_noise_mm));
+  estimate->relief_sigmas = decision.relief_sigmas;
   estimate->searched_again = in.searched_again;
   return true;
 }

@@ -126,6 +126,7 @@ struct Decision {
   float score = 0;
   bool rival_taken = false;  // the rival, not the best, is the pipe (its ends shown where they are)
   bool unresolved = false;   // pickable but for the tube's relief against the noise
+  float relief_sigmas = 0;   // of the pose judged (tube_relief_sigmas)
 };
 
 // The outcome of a candidate from its evidence: the first check it fails (in the order of the

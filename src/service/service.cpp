@@ -207,14 +207,15 @@ void Service::publish_status() {
 // says so, with what would change it: the first such LOCATE after a pick, then every 100th.
 void Service::note_unresolved(const LocateOutput& out) {
   unresolved_ = Unresolved{};
-  for (const PipeEstimate& e : out.estimates) record_.unresolved += e.unresolved;
-  if (!ranked_.empty()) unresolved_cycles_ = 0;
-  if (!ranked_.empty() || out.budget_exhausted) return;
-  for (const PipeEstimate& e : out.estimates)
+  for (const PipeEstimate& e : out.estimates) {
+    record_.unresolved += e.unresolved;
     if (e.unresolved && e.relief_sigmas > unresolved_.relief_sigmas) {
       unresolved_.relief_sigmas = e.relief_sigmas;
       unresolved_.depth_mm = float(e.model_to_cam.translation().norm());
     }
+  }
+  if (!ranked_.empty()) unresolved_cycles_ = 0;
+  if (!ranked_.empty() || out.budget_exhausted) unresolved_.relief_sigmas = -1;  // nothing to warn of
   unresolved_.noise_mm = float(locator_.config().frame_noise_mm);
   unresolved_.noise_measured = out.noise.samples >= kMinNoiseSamples;
 }

@@ -155,8 +155,7 @@ void TimingLog::write(const CycleRecord& r) {
       "\"locate_ms\":%.2f,\"again_ms\":%.2f,\"cycle_ms\":%.2f,\"budget_ms\":%.1f,\"budget_use\":%.3f,"
       "\"budget_exhausted\":%s,"
       "\"candidates\":%d,\"tried\":%d,\"accepted\":%d,\"count\":%d,\"unresolved\":%d,\"score\":%.4f,"
-      "\"status\":\"%s\","
-      "\"error\":\"%s\"}\n",
+      "\"status\":\"%s\",\"error\":\"%s\"}\n",
       (unsigned long long)r.cycle, unsigned(r.command), unsigned(r.req_id), r.trigger_unix_ms,
       (unsigned long long)r.frame_sequence, r.queued_ms, grab_status_name(r.grab), r.frame_check, r.grab_ms,
       r.frame_age_ms, t.zbuffer_ms, t.normals_ms, t.regions_ms, t.axis_ms, t.ridge_icp_ms, t.refine_ms,
