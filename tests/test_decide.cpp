@@ -68,6 +68,13 @@ Evidence ends_read(Evidence e, int best_pinned, int best_continued, int second_p
   return e;
 }
 
+// ... where the rival's ends lie within the first end probe's reach of the best's: both are read
+// beyond the same ends of the pipe (ends_tell_apart).
+Evidence ends_within_reach(Evidence e) {
+  e.rival_ends_apart = false;
+  return e;
+}
+
 // Another turn of the pipe about its own length confirmed as well, further than the pick's
 // tolerance from the best (judge_rolls).
 Evidence turn_unsure(Evidence e) {
@@ -312,6 +319,15 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
       {"twin as good, no end seen",
        ends_read(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), 0, 0, 0, 0), true,
        CandidateOutcome::accepted, true, false, 0.45f},
+      // ... but not where the twin's ends lie within the probes' reach of the best's: what the
+      // probes read there speaks for neither. The pixels telling them apart still may.
+      {"twin as good, its end goes on, its ends within reach of the best's",
+       ends_within_reach(ends_read(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), 2, 0, 1, 1)), true,
+       CandidateOutcome::accepted, true, false, 0.45f},
+      {"twin as good, ends within reach, the pixels telling them apart show the best",
+       told(ends_within_reach(ends_read(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), 2, 0, 1, 1)),
+            kMinTellingPx, 0),
+       true, CandidateOutcome::accepted, false, true, 0.9f},
       // Where the two differ, the image shows the best and hardly the rival: not ambiguous.
       {"twin as good, the pixels telling them apart show the best",
        told(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), kMinTellingPx,
@@ -339,6 +355,9 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
       {"rival as good, the tube goes on beyond the best's end",
        ends_read(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), 1, 1, 1, 0), true,
        CandidateOutcome::accepted, false, true, 0.88f, true},
+      {"rival as good, the image pins its end and not the best's, within reach of them",
+       ends_within_reach(ends_read(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), 0, 0, 1, 0)), true,
+       CandidateOutcome::accepted, true, false, 0.45f},
       // ... or whose ends it shows as well where, of the pixels telling the two apart, it shows
       // the rival and hardly the best (a Z's twin with its legs swapped, one end out of the view).
       {"rival as good, the pixels telling them apart show the rival",
@@ -351,6 +370,10 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
        told(ends_read(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), 1, 0, 1, 0),
             kMinTellingPx / kTellingRatio + 1, kMinTellingPx),
        true, CandidateOutcome::accepted, true, false, 0.45f},
+      {"the pixels show the rival, the best's ends pinned within reach of the rival's",
+       told(ends_within_reach(ends_read(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), 2, 0, 1, 0)), 0,
+            kMinTellingPx),
+       true, CandidateOutcome::accepted, false, true, 0.88f, true},
       {"rival as good, its end pinned, but under the floor",
        ends_read(judged_with_rival(seen(900, 0, 0), below_floor(seen(880, 0, 0), 0.31f)), 0, 0, 1, 0), true,
        CandidateOutcome::not_confirmed, false, false, 0, true},
@@ -375,6 +398,10 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
       // ending outright; a pin read past a hidden tip or on one probe does not.
       {"sliding, an end seen ending, a slid rival as good with none seen",
        seen_ending(sliding(ends_read(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), 1, 0, 0, 0), 1, 0), 1),
+       true, CandidateOutcome::accepted, false, true, 0.9f},
+      {"sliding, an end seen ending, a slid rival as good within reach of its ends",
+       ends_within_reach(seen_ending(
+           sliding(ends_read(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), 1, 0, 0, 0), 1, 0), 1)),
        true, CandidateOutcome::accepted, false, true, 0.9f},
       {"sliding, an end pinned past a hidden tip, a slid rival as good",
        sliding(ends_read(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), 1, 0, 0, 0), 1, 0), true,

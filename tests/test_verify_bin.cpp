@@ -287,6 +287,43 @@ TEST(BinAwareVerification, AnArcIsPlacedAlongItselfOnlyByAnEndTheImageShows) {
   EXPECT_EQ(unseen.ends_continued, 0);
 }
 
+// The straight tube on the floor, its ends read by judge_ends() at the true pose and at poses
+// slid along it. Slid less far than the first probe beyond an end reaches, both poses are read
+// beyond the same ends of the pipe: each has both ends pinned, so the ends do not tell them apart,
+// and ends_tell_apart() says so. Slid further, the tube goes on beyond one end of the slid pose.
+TEST(BinAwareVerification, EndsTellPosesApartOnlyWhereTheyLieBeyondTheFirstProbe) {
+  TubeOnFloor tube;
+  const std::vector<Eigen::Vector3f>& line = tube.lm.centreline_points;
+  const float d = float(kTubeMm), tol = 7.0f;
+  const auto pose_at = [&](double x_mm) {
+    Pose m2w = Pose::Identity();
+    m2w.translation() = Eigen::Vector3d(x_mm, 0, kTubeMm / 2);
+    return Pose(*tube.s.camera.world_to_cam * m2w);
+  };
+  const auto ends = [&](const Pose& m2c) {
+    Verification v;
+    judge_ends(line, d, m2c, tube.s.depth, tube.s.camera.intrinsics, tol, &v);
+    return v;
+  };
+  const Pose truth = pose_at(-75);
+  EXPECT_EQ(ends(truth).ends_pinned, 2);
+  for (const double slid_of_d : {0.3, 0.5}) {
+    SCOPED_TRACE(slid_of_d);
+    const Pose slid = pose_at(-75 + slid_of_d * kTubeMm);
+    EXPECT_EQ(ends(slid).ends_pinned, 2);
+    EXPECT_EQ(ends(slid).ends_continued, 0);
+    EXPECT_FALSE(ends_tell_apart(line, d, truth, slid));
+  }
+  const Pose far_slid = pose_at(-75 + 1.2 * kTubeMm);
+  EXPECT_EQ(ends(far_slid).ends_continued, 1);
+  EXPECT_TRUE(ends_tell_apart(line, d, truth, far_slid));
+  // Turned end for end about its middle, the tube's ends lie where they were: nothing to tell.
+  Pose turned = truth;
+  turned = truth * Eigen::Translation3d(75, 0, 0) * Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitZ()) *
+           Eigen::Translation3d(-75, 0, 0);
+  EXPECT_FALSE(ends_tell_apart(line, d, truth, turned));
+}
+
 // On a simulated bin (floor at z = 0) the floor is found, a pipe's pose lies on it, and the same
 // pose four diameters lower lies under it.
 // A bend with legs of 85 and 104 mm and its near twin (turned end for end: its legs swapped).

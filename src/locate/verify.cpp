@@ -229,6 +229,16 @@ void judge_ends(const std::vector<Eigen::Vector3f>& centreline, float d, const P
   }
 }
 
+bool ends_tell_apart(const std::vector<Eigen::Vector3f>& centreline, float d, const Pose& a, const Pose& b) {
+  if (centreline.size() < 2) return true;
+  const auto at = [&](const Pose& pose, const Eigen::Vector3f& p) { return pose * p.cast<double>(); };
+  const Eigen::Vector3d a0 = at(a, centreline.front()), a1 = at(a, centreline.back());
+  const Eigen::Vector3d b0 = at(b, centreline.front()), b1 = at(b, centreline.back());
+  const double paired = std::max((a0 - b0).norm(), (a1 - b1).norm());
+  const double swapped = std::max((a0 - b1).norm(), (a1 - b0).norm());
+  return std::min(paired, swapped) > double(kEndProbesOfD[0] * d);
+}
+
 TellingPixels tell_apart(const Image<float>& a_mm, const PixelBox& box_a, const Image<float>& b_mm,
                          const PixelBox& box_b, const Image<float>& depth, float tol) {
   TellingPixels out;

@@ -99,6 +99,13 @@ Verification verify_pose(const Mesh& mesh, Winding winding, const Pose& model_to
 void judge_ends(const std::vector<Eigen::Vector3f>& centreline, float d_mm, const Pose& model_to_cam,
                 const Image<float>& depth_mm, const Intrinsics& k, float tolerance_mm, Verification* v,
                 bool tip_must_show = false, bool read_further = false);
+// Whether judge_ends can tell two poses of one centreline (model frame, tube diameter d_mm) apart:
+// with their ends paired so that they lie closest, an end of one lies farther from the other's
+// than the first probe beyond an end reaches. Nearer, both poses' probes read beyond the same end
+// of the pipe, and what they read speaks for neither: a near twin whose legs differ by a third of
+// D is then told from the pipe by the noise of one pixel (docs/experiments.md).
+bool ends_tell_apart(const std::vector<Eigen::Vector3f>& centreline, float d_mm, const Pose& a,
+                     const Pose& b);
 // Beyond the paper: two poses told apart by the image. Where their renders (depth in each box,
 // 0 where not drawn) differ by more than tolerance_mm, each pixel speaks for the pose whose
 // surface the sensor measured there, or against one it saw through; rims are left out (lateral
