@@ -16,6 +16,14 @@ Verification seen(int agree_px, int free_space_px, int occluded_px) {
   return v;
 }
 
+// ... of `model_px` pixels, `agree_px` of them agreeing.
+Verification seen_on(int agree_px, int model_px) {
+  Verification v;
+  v.model_px = v.inner_px = model_px;
+  v.agree_px = agree_px;
+  return v;
+}
+
 constexpr float kD = 20;  // tube diameter (mm): R_th = 0.35 * 20 = 7 mm at the default config
 constexpr float kL = 200;  // longest extent (mm): a ridge of 10 points is needed (short pipes: fewer)
 
@@ -379,6 +387,9 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
        CandidateOutcome::not_confirmed, false, false, 0, true},
       {"rival clearly worse", judged_with_rival(seen(900, 0, 0), seen(840, 0, 0)), true,
        CandidateOutcome::accepted, false, true, 0.9f},
+      // ... but 0.06 worse on a pipe of 150 pixels is within two standard errors of the agreement.
+      {"rival 0.06 worse on 150 pixels", judged_with_rival(seen_on(135, 150), seen_on(126, 150)), true,
+       CandidateOutcome::accepted, true, false, 0.45f},
       // A turn about its own length the image does not tell apart: not known to the pick's tolerance.
       {"its turn about its length not told", turn_unsure(judged(seen(900, 0, 0))), true,
        CandidateOutcome::accepted, true, false, 0.45f},

@@ -68,9 +68,18 @@ float seen_through(const CandidateContext& ctx, const RidgeFit& f, const Candida
                             float(ctx.cfg.verify_tolerance_mm));
 }
 
-// A rival the image confirms about as well as the best: within ambiguity_quality_margin of it.
+// A rival the image confirms about as well as the best: within ambiguity_quality_margin of it, or
+// where the best covers few pixels, within kQualityMarginErrors standard errors of its agreement
+// share (two poses' shares, each binomial over the best's pixels), the larger. A near twin of a
+// 12 mm S 1.1-1.2 m away, on 150 pixels, agreed 0.06 below the best by chance (docs/experiments.md,
+// "Near twins beyond the zoo's heights").
 bool as_good(const Verification& rival, const Verification& best, const LocateConfig& cfg) {
-  return hypothesis_quality(rival) >= hypothesis_quality(best) - float(cfg.ambiguity_quality_margin);
+  float margin = float(cfg.ambiguity_quality_margin);
+  if (best.model_px > 0) {
+    const float p = std::clamp(best.agreement(), 0.0f, 1.0f);
+    margin = std::max(margin, kQualityMarginErrors * std::sqrt(2.0f * p * (1.0f - p) / float(best.model_px)));
+  }
+  return hypothesis_quality(rival) >= hypothesis_quality(best) - margin;
 }
 
 // How well the image shows a pose's ends where they are: an end pinned speaks for it, the tube

@@ -159,7 +159,8 @@ struct LocateConfig {
   double pick_min_relief_sigmas = 3;
   int verify_hypotheses = 3;               // distinct ridge fits refined and checked per region
   double ambiguity_pose_mm = 10;           // two fits further apart than this (MSSD) ...
-  double ambiguity_quality_margin = 0.05;  // ... both confirmed within this margin: ambiguous
+  double ambiguity_quality_margin = 0.05;  // ... both confirmed within this margin (or within two
+                                           // standard errors of the best's agreement, the larger): ambiguous
   bool tell_rivals_apart = true;  // ... unless, where the two differ, the image speaks for the best
                                   // (at least 20 pixels) and at most a quarter as much for the rival
                                   // (not for a pipe that slides along itself: its ends place it)
