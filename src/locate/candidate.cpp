@@ -69,10 +69,11 @@ float seen_through(const CandidateContext& ctx, const RidgeFit& f, const Candida
 }
 
 // A rival the image confirms about as well as the best: within ambiguity_quality_margin of it, or
-// where the best covers few pixels, within kQualityMarginErrors standard errors of its agreement
-// share (two poses' shares, each binomial over the best's pixels), the larger. A near twin of a
-// 12 mm S 1.1-1.2 m away, on 150 pixels, agreed 0.06 below the best by chance (docs/experiments.md,
-// "Near twins beyond the zoo's heights").
+// where the best covers few pixels, within this many standard errors of its agreement share (two
+// poses' shares, each binomial over the best's pixels), the larger. A near twin of a 12 mm S
+// 1.1-1.2 m away, on 150 pixels, agreed 0.06 below the best by chance (docs/experiments.md, "A
+// quality margin no narrower than the agreement's noise").
+constexpr float kQualityMarginErrors = 2.0f;
 bool as_good(const Verification& rival, const Verification& best, const LocateConfig& cfg) {
   float margin = float(cfg.ambiguity_quality_margin);
   if (best.model_px > 0) {

@@ -46,9 +46,6 @@ constexpr float kSamePipeOfD = 2.0f;
 inline bool share_the_tube(const LocatorModel& lm, const Pose& a, const Pose& b) {
   return shared_tube(lm, a, b) >= kRivalMinSharedTube || shared_tube(lm, b, a) >= kRivalMinSharedTube;
 }
-// Two hypotheses are confirmed about as well (as_good) within this many standard errors of the
-// best's agreement share, where that is more than ambiguity_quality_margin.
-constexpr float kQualityMarginErrors = 2.0f;
 // An ambiguous estimate keeps half its score: it ranks below a sure one of about the same cover.
 constexpr float kAmbiguousScoreFactor = 0.5f;
 // A rival is told apart where at least kMinTellingPx pixels speak for the best and at most
