@@ -298,8 +298,15 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
       {"ends read, none pinned, a twentieth out of the view",
        ends_read(judged(outside_view(seen(950, 0, 0), 0.05f)), 0, 0, 0, 0), true, CandidateOutcome::accepted,
        false, true, 0.9025f},
-      {"ends read, going on beyond one", ends_read(judged(seen(900, 0, 0)), 1, 1, 0, 0), true,
-       CandidateOutcome::accepted, false, true, 0.9f},
+      // Going on beyond one end, wholly in view: placed only where the other is seen ending outright
+      // (a thin U laid across two pipes pins an end past a hidden tip).
+      {"ends read, going on beyond one, the other seen ending",
+       seen_ending(ends_read(judged(seen(900, 0, 0)), 1, 1, 0, 0), 1), true, CandidateOutcome::accepted, false,
+       true, 0.9f},
+      {"ends read, going on beyond one, the other pinned but not seen ending",
+       ends_read(judged(seen(900, 0, 0)), 1, 1, 0, 0), true, CandidateOutcome::accepted, false, false, 0.9f},
+      {"the same, a twentieth out of the view", ends_read(judged(outside_view(seen(950, 0, 0), 0.05f)), 1, 1, 0, 0),
+       true, CandidateOutcome::accepted, false, true, 0.9025f},
       {"a tenth under a pipe, a tenth out of the view", judged(outside_view(seen(900, 0, 100), 0.1f)), true,
        CandidateOutcome::accepted, false, true, 0.729f},
       {"a twentieth out of the view", judged(outside_view(seen(900, 0, 0), 0.05f)), true,
