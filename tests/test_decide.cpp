@@ -510,6 +510,19 @@ TEST(Decide, APoseIsHandedOutOnlyWhereTheSensorResolvesTheTube) {
   EXPECT_FALSE(d.unresolved);
 }
 
+// The pixels telling a pose from its rival are read at 3 sigmas of the frame's noise where that
+// is finer than the verify tolerance; with no noise measured, at the tolerance.
+TEST(Decide, TellingPixelsAreReadAtTheNoiseWhereItIsFinerThanTheTolerance) {
+  LocateConfig cfg;
+  cfg.verify_tolerance_mm = 7;
+  cfg.frame_noise_mm = 1.5;  // a Kinect-class sensor at 0.7 m
+  EXPECT_FLOAT_EQ(telling_tolerance_mm(cfg), 4.5f);
+  cfg.frame_noise_mm = 3.5;  // an active-stereo sensor at 1.15 m: the tolerance is finer
+  EXPECT_FLOAT_EQ(telling_tolerance_mm(cfg), 7.0f);
+  cfg.frame_noise_mm = 0;
+  EXPECT_FLOAT_EQ(telling_tolerance_mm(cfg), 7.0f);
+}
+
 // A pose turned about the pipe's length takes the found one's place only where the image shows
 // its ends no worse: frame 22 of a 23-planar bin (bin seed 1022) had the found pose pin an end
 // (quality 0.840) and its half-turn, laid over the pipe running out of the view, pin none (0.909):

@@ -49,9 +49,15 @@ inline bool share_the_tube(const LocatorModel& lm, const Pose& a, const Pose& b)
 // An ambiguous estimate keeps half its score: it ranks below a sure one of about the same cover.
 constexpr float kAmbiguousScoreFactor = 0.5f;
 // A rival is told apart where at least kMinTellingPx pixels speak for the best and at most
-// 1 / kTellingRatio of that for the rival (tell_apart).
-constexpr int kMinTellingPx = 20;
+// 1 / kTellingRatio of that for the rival (tell_apart). 10, not 20: a lone 12 mm S at 0.6-1 m
+// shows 2-16 such pixels against its twin (docs/experiments.md).
+constexpr int kMinTellingPx = 10;
 constexpr int kTellingRatio = 4;
+// The pixels telling two poses apart are read at this many sigmas of the frame's measured noise
+// where that is finer than the verify tolerance (telling_tolerance_mm).
+constexpr double kTellingToleranceOfSigma = 3.0;
+// The depth difference that makes a pixel telling, and within which a reading speaks for a render.
+float telling_tolerance_mm(const LocateConfig& cfg);
 
 struct PipeEstimate {
   Pose model_to_bin = Pose::Identity();
