@@ -181,6 +181,33 @@ TEST(Locator, AnUnequalLeggedBendIsNotHandedOutEndForEnd) {
   EXPECT_LE(20 * wrong, pickable) << wrong << " of " << pickable << " pickable poses are more than 10 mm off";
 }
 
+// A near-symmetric S alone on the floor (the zoo's 12.3 mm S, legs 9.4 and 14 mm): its twin, the
+// legs swapped, is confirmed about as well, its ends a third of D off. The pipe is handed out in
+// more than half of the frames (7 of these 12, with the telling pixels read at the noise or not:
+// on 480 lone-pipe images that gained 9 picks, docs/experiments.md), and the twin never.
+TEST(Locator, ALoneNearSymmetricSIsHandedOutAndNeverItsTwin) {
+  const PipeModel model = pipe_of("S9.4,B108.2r14.4,S9.4,B-85.7r15.5,S14", 12.3, "near-symmetric S");
+  ASSERT_EQ(model.near_symmetries.size(), 1u);
+  int picked = 0, wrong = 0;
+  const int frames = 12;
+  for (unsigned seed = 1; seed <= unsigned(frames); ++seed) {
+    std::mt19937 rng(70 + seed);
+    SceneParams p;
+    p.pile.pipes = 1;
+    p.camera_height_min_mm = 600, p.camera_height_max_mm = 800;
+    const SimulatedScene s = simulate_scene(model, p, rng);
+    Locator loc(model, LocateConfig{}, s.camera.intrinsics);
+    const LocateOutput& out = loc.locate(s.depth_mm, s.camera);
+    const int k = out.pick();
+    if (k < 0) continue;
+    ++picked;
+    wrong += nearest_pipe_error(model, out.estimates[std::size_t(k)].model_to_cam, s) > 10;
+  }
+  std::printf("lone near-symmetric S: picked in %d of %d frames, %d wrong\n", picked, frames, wrong);
+  EXPECT_GT(2 * picked, frames);
+  EXPECT_EQ(wrong, 0);
+}
+
 // An arc slides along itself: where its ends are hidden the image fits the slid pose as well.
 // No pose handed out as pickable may lie more than 10 mm from every arc of the pile.
 TEST(Locator, NoPickablePoseIsAnArcSlidAlongItself) {
