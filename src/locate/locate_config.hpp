@@ -161,9 +161,10 @@ struct LocateConfig {
   double ambiguity_pose_mm = 10;           // two fits further apart than this (MSSD) ...
   double ambiguity_quality_margin = 0.05;  // ... both confirmed within this margin (or within two
                                            // standard errors of the best's agreement, the larger): ambiguous
-  bool tell_rivals_apart = true;  // ... unless, where the two differ, the image speaks for the best
-                                  // (at least 20 pixels) and at most a quarter as much for the rival
-                                  // (not for a pipe that slides along itself: its ends place it)
+  bool tell_rivals_apart = true;           // ... unless, where the two differ, the image speaks for the best
+                                           // (kMinTellingPx pixels at telling_tolerance_mm) and at most a
+                                           // quarter as much for the rival
+                                           // (not for a pipe that slides along itself: its ends place it)
   bool judge_rolls = true;        // the found pose turned about the pipe's own length by quarter turns
   double roll_ambiguity_mm = 5;   // ... a turn the image confirms as well that moves the pick further
                                   // than this (the pick-correct tolerance): ambiguous
