@@ -52,6 +52,16 @@ if "$here/tools/zoo" --bin "$bin" --out "$work/zoo" --budget-ms -5 > "$work/zoo5
   fail "--budget-ms -5 accepted"
 fi
 grep -q -- '--budget-ms -5' "$work/zoo5.txt" || fail "--budget-ms -5: no message naming it: $(cat "$work/zoo5.txt")"
+# Another seed draws another list of shapes (a held-out zoo); --reuse makes its data anew.
+"$here/tools/zoo" --list > "$work/list19.txt"
+"$here/tools/zoo" --seed 20 --list > "$work/list20.txt"
+"$here/tools/zoo" --seed 20 --list | cmp -s - "$work/list20.txt" || fail "--seed 20: the list is not the same twice"
+if cmp -s "$work/list19.txt" "$work/list20.txt"; then fail "--seed 20: the same list as the default"; fi
+"$here/tools/zoo" --bin "$bin" --out "$work/zoo" --seed 20 --shapes 15 --images 2 --reuse --no-clear \
+  > "$work/zoo7.txt" 2>&1 || fail "--seed 20 run failed: $(tail -20 "$work/zoo7.txt")"
+grep -q 'drawn with seed 20' "$work/zoo7.txt" || fail "--seed 20: not said: $(head -3 "$work/zoo7.txt")"
+python3 -c 'import json,sys; assert json.load(open(sys.argv[1]))["seed"] == 20' "$work/zoo/shapes/15-arc/shape.json" ||
+  fail "--seed 20 --reuse: the default draw's data kept"
 # A bad count is refused, naming the option.
 if "$here/tools/zoo" --bin "$bin" --out "$work/zoo" --bins 0 > "$work/zoo3.txt" 2>&1; then fail "--bins 0 accepted"; fi
 grep -q -- '--bins 0' "$work/zoo3.txt" || fail "--bins 0: no message naming it: $(cat "$work/zoo3.txt")"
