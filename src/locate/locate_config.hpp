@@ -180,6 +180,9 @@ struct LocateConfig {
   bool slides_placed_first = true;  // ... and of two of its hypotheses the image confirms about as
                                     // well, one its ends place goes before one they show slid
                                     // (with judge_slides: its slid rivals check the pose put first)
+  bool place_slides_finely = true;  // ... and a pose of it its ends pin is moved along itself by
+                                    // up to D in D/12 steps to where the image confirms the most
+                                    // and sees through the least of it, if its ends show no worse
 
   // The paper's comparison: ICP on points sampled from the whole visible surface instead of the
   // Z-ridge (eval-bop --match surface).
@@ -207,6 +210,7 @@ inline void use_paper_search(LocateConfig* c) {
   c->icp_continued_states = c->icp_continued_states_sliding = 2 * c->initial_rotations;
   c->judge_slides = false;
   c->slides_placed_first = false;
+  c->place_slides_finely = false;
   c->ends_read_further = false;
   c->judge_rolls = false;
   c->residual_rescue_of_rth = 1;

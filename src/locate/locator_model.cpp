@@ -211,6 +211,17 @@ LocatorModel prepare_locator_model(const PipeModel& model, float margin_mm, cons
     add_slides({1.5f * step, 3.0f * step, 5.0f * step});
     lm.short_slides = lm.slides.size();
     add_slides(far);
+    // Slides of D/12 up to D both ways place a pose its ends pin finer than the steps above
+    // (place_slides_finely).
+    if (!lm.slides.empty()) {
+      constexpr int kFineSteps = 12;
+      std::vector<float> fine;
+      for (int k = 1; k <= kFineSteps; ++k) fine.push_back(lm.tube_d_mm * float(k) / float(kFineSteps));
+      for (const Slide& s :
+           find_slides(model.surface, centreline, lm.tube_d_mm, fine,
+                       near.near_symmetry_tolerance_of_diameter * lm.tube_d_mm, near.near_symmetry_min_share))
+        lm.fine_slides.push_back(s.motion);
+    }
   }
   if (lm.centreline_points.size() >= 3 && !lm.straight && lm.slides.empty()) {
     const Eigen::Vector3f c = centroid_of(lm.centreline_points);

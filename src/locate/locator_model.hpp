@@ -52,6 +52,8 @@ struct LocatorModel {
   // The first short_slides move it up to five steps; the others, far along it (a coil a third of
   // a turn round its helix), as far as its near-symmetry share leaves it on itself.
   std::vector<Pose> slides;
+  // ... and slides of D/12 to D both ways, which place a pose its ends pin (place_slides_finely).
+  std::vector<Pose> fine_slides;
   std::size_t short_slides = 0;
   // Beyond the paper: quarter turns about the centreline's principal axis through its centroid
   // (none for a straight tube, whose turn about its axis is the same pick, nor for a pipe that
