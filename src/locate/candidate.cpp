@@ -737,7 +737,7 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
   // its end met a drop would be pinned there (a held-out 12 mm arc: a pick 99 mm off). Only a
   // pose the image's checks accept is moved: moved, a pose they reject can pass them by a hair (a
   // straight tube and an arc on a real table-top frame without pipes, both handed out). On the
-  // held-out zoos (tools/zoo --seed 20, 21) 4 of 9 wrong picks gone, 14 more top pipes found
+  // held-out zoos (tools/zoo --seed 20, 21) 4 of 9 wrong picks gone, 15 more top pipes found
   // (docs/zoo.md).
   if (cfg.place_slides_finely && have_best && !lm.fine_slides.empty() && placed_by_ends(best.check) &&
       image_accepts(best.check, cfg) && !deadline.passed()) {
