@@ -747,22 +747,24 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
     const Pose found = best.model_to_bin;
     int most = confirmed_less_seen_through(best.check);
     const Pose* best_slide = nullptr;
+    Verification best_slide_check;
     const auto t0 = Clock::now();
     for (const Pose& s : lm.fine_slides) {
-      const int here = confirmed_less_seen_through(verify_at(ctx.bin_to_cam * (found * s)));
-      if (here > most) most = here, best_slide = &s;
+      const Verification v = verify_at(ctx.bin_to_cam * (found * s));
+      if (confirmed_less_seen_through(v) > most)
+        most = confirmed_less_seen_through(v), best_slide = &s, best_slide_check = v;
     }
-    buf->times.verify_ms += ms_since(t0);
     if (best_slide) {
       PipeEstimate slid = best;  // judged where it lies, not refined again (it would slide back)
       slid.model_to_bin = found * *best_slide;
       slid.model_to_cam = ctx.bin_to_cam * slid.model_to_bin;
-      slid.check = verify_at(slid.model_to_cam);
+      slid.check = best_slide_check;
       read_ends_and_floor(&slid);
       if (turn_may_replace(slid.check, best.check) &&
           slid.check.ends_seen_ending >= best.check.ends_seen_ending)
         best = slid;
     }
+    buf->times.verify_ms += ms_since(t0);
   }
   // Beyond the paper: the best polished. Of the hypotheses that are one reading, the image's
   // judgement took the one it confirms best, which does not tell a turn of 10-30 degrees about a
