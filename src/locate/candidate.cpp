@@ -738,7 +738,9 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
   // pose the image's checks accept is moved: moved, a pose they reject can pass them by a hair (a
   // straight tube and an arc on a real table-top frame without pipes, both handed out). On the
   // held-out zoos (tools/zoo --seed 20, 21) 4 of 9 wrong picks gone, 15 more top pipes found
-  // (docs/zoo.md).
+  // (docs/zoo.md). Moved, the pose may be the same reading as its rival (an arc's rival slid 14
+  // mm, the pose moved 10 mm towards it): the rival, no longer one, is dropped, else the two made
+  // the pipe ambiguous (14-arc of seed 20: its bin stopped after 2 pipes, now 4).
   if (cfg.place_slides_finely && have_best && !lm.fine_slides.empty() && placed_by_ends(best.check) &&
       image_accepts(best.check, cfg) && !deadline.passed()) {
     const auto confirmed_less_seen_through = [](const Verification& v) {
@@ -761,8 +763,10 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
       slid.check = best_slide_check;
       read_ends_and_floor(&slid);
       if (turn_may_replace(slid.check, best.check) &&
-          slid.check.ends_seen_ending >= best.check.ends_seen_ending)
+          slid.check.ends_seen_ending >= best.check.ends_seen_ending) {
         best = slid;
+        if (have_second && !rivals(best, second)) have_second = false;
+      }
     }
     buf->times.verify_ms += ms_since(t0);
   }
