@@ -262,6 +262,7 @@ void read_locate(Section& s, LocateConfig* c) {
   s.boolean("ends_read_further", &c->ends_read_further);
   s.boolean("slides_placed_first", &c->slides_placed_first);
   s.boolean("place_slides_finely", &c->place_slides_finely);
+  s.boolean("follow_slides_to_ends", &c->follow_slides_to_ends);
   s.integer("max_candidates", &c->max_candidates, 1, 256, "regions");
   s.integer("max_results", &c->max_results, 0, 256, "poses (0: every pose found)");
   s.integer("threads", &c->threads, 1, 64, "threads");

@@ -183,6 +183,9 @@ struct LocateConfig {
   bool place_slides_finely = true;  // ... and a pose of it its ends pin is moved along itself by
                                     // up to D in D/12 steps to where the image confirms the most
                                     // and sees through the least of it, if its ends show no worse
+  bool follow_slides_to_ends = true;  // ... and a pose of it the tube goes on beyond, no end pinned,
+                                      // is moved along itself by D, 2 D, ... to where the image
+                                      // shows one of its ends ending outright
 
   // The paper's comparison: ICP on points sampled from the whole visible surface instead of the
   // Z-ridge (eval-bop --match surface).
@@ -211,6 +214,7 @@ inline void use_paper_search(LocateConfig* c) {
   c->judge_slides = false;
   c->slides_placed_first = false;
   c->place_slides_finely = false;
+  c->follow_slides_to_ends = false;
   c->ends_read_further = false;
   c->judge_rolls = false;
   c->residual_rescue_of_rth = 1;

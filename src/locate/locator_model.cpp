@@ -202,25 +202,25 @@ LocatorModel prepare_locator_model(const PipeModel& model, float margin_mm, cons
     const float furthest = (1.0f - near.near_symmetry_min_share) * centreline.length_mm();
     std::vector<float> far;
     for (float arc = 8.0f * step; arc <= furthest; arc *= 2.0f) far.push_back(arc);
-    const auto add_slides = [&](const std::vector<float>& arcs) {
+    const auto add_slides = [&](const std::vector<float>& arcs, std::vector<Pose>* to) {
       for (const Slide& s :
            find_slides(model.surface, centreline, lm.tube_d_mm, arcs,
                        near.near_symmetry_tolerance_of_diameter * lm.tube_d_mm, near.near_symmetry_min_share))
-        lm.slides.push_back(s.motion);
+        to->push_back(s.motion);
     };
-    add_slides({1.5f * step, 3.0f * step, 5.0f * step});
+    add_slides({1.5f * step, 3.0f * step, 5.0f * step}, &lm.slides);
     lm.short_slides = lm.slides.size();
-    add_slides(far);
+    add_slides(far, &lm.slides);
     // Slides of D/12 up to D both ways place a pose its ends pin finer than the steps above
-    // (place_slides_finely).
+    // (place_slides_finely); slides of D, 2 D, ... as far as the far slides reach follow a pose
+    // the tube goes on beyond to its end (follow_slides_to_ends).
     if (!lm.slides.empty()) {
       constexpr int kFineSteps = 12;
-      std::vector<float> fine;
+      std::vector<float> fine, follow;
       for (int k = 1; k <= kFineSteps; ++k) fine.push_back(lm.tube_d_mm * float(k) / float(kFineSteps));
-      for (const Slide& s :
-           find_slides(model.surface, centreline, lm.tube_d_mm, fine,
-                       near.near_symmetry_tolerance_of_diameter * lm.tube_d_mm, near.near_symmetry_min_share))
-        lm.fine_slides.push_back(s.motion);
+      for (float arc = lm.tube_d_mm; arc <= furthest; arc += lm.tube_d_mm) follow.push_back(arc);
+      add_slides(fine, &lm.fine_slides);
+      add_slides(follow, &lm.follow_slides);
     }
   }
   if (lm.centreline_points.size() >= 3 && !lm.straight && lm.slides.empty()) {

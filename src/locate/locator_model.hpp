@@ -54,6 +54,9 @@ struct LocatorModel {
   std::vector<Pose> slides;
   // ... and slides of D/12 to D both ways, which place a pose its ends pin (place_slides_finely).
   std::vector<Pose> fine_slides;
+  // ... and slides of D, 2 D, ... both ways as far as the far slides reach, along which a pose
+  // the tube goes on beyond is followed to where the image shows its end (follow_slides_to_ends).
+  std::vector<Pose> follow_slides;
   std::size_t short_slides = 0;
   // Beyond the paper: quarter turns about the centreline's principal axis through its centroid
   // (none for a straight tube, whose turn about its axis is the same pick, nor for a pipe that
