@@ -392,13 +392,8 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
       {"rival as good, its end pinned, but under the floor",
        ends_read(judged_with_rival(seen(900, 0, 0), below_floor(seen(880, 0, 0), 0.31f)), 0, 0, 1, 0), true,
        CandidateOutcome::not_confirmed, false, false, 0, true},
-      {"rival clearly worse", told(judged_with_rival(seen(900, 0, 0), seen(840, 0, 0)), 60, 0), true,
+      {"rival clearly worse", judged_with_rival(seen(900, 0, 0), seen(840, 0, 0)), true,
        CandidateOutcome::accepted, false, true, 0.9f},
-      // ... but not where too few pixels tell the two apart: the difference is the rims' and the
-      // noise's (a thin near twin at a metre, rival_beaten_by_pixels).
-      {"rival clearly worse, too few pixels telling them apart",
-       told(judged_with_rival(seen(900, 0, 0), seen(840, 0, 0)), kMinTellingPx / 2, kMinTellingPx / 2 - 1), true,
-       CandidateOutcome::accepted, true, false, 0.45f},
       // ... but 0.06 worse on a pipe of 150 pixels is within two standard errors of the agreement.
       {"rival 0.06 worse on 150 pixels", judged_with_rival(seen_on(135, 150), seen_on(126, 150)), true,
        CandidateOutcome::accepted, true, false, 0.45f},
@@ -429,7 +424,7 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
       {"sliding, an end pinned past a hidden tip, a slid rival as good",
        sliding(ends_read(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), 1, 0, 0, 0), 1, 0), true,
        CandidateOutcome::accepted, true, false, 0.45f},
-      {"rival seen through: worse", told(judged_with_rival(seen(900, 0, 0), seen(900, 30, 0)), 30, 0), true,
+      {"rival seen through: worse", judged_with_rival(seen(900, 0, 0), seen(900, 30, 0)), true,
        CandidateOutcome::accepted, false, true, 0.9f},
   };
   const LocateConfig cfg;
@@ -470,11 +465,6 @@ TEST(Decide, ThresholdsComeFromTheConfig) {
   EXPECT_TRUE(decide(told_apart, cfg).ambiguous);
   cfg.ambiguity_quality_margin = 0.01;
   EXPECT_FALSE(decide(judged_with_rival(seen(900, 0, 0), seen(860, 0, 0)), cfg).ambiguous);
-  cfg.tell_rivals_apart = true;
-  const Evidence untold = judged_with_rival(seen(900, 0, 0), seen(840, 0, 0));  // no pixel tells them
-  EXPECT_TRUE(decide(untold, cfg).ambiguous);
-  cfg.rival_beaten_by_pixels = false;
-  EXPECT_FALSE(decide(untold, cfg).ambiguous);
   const Evidence half_read = seen_ending(ends_read(judged(unread(seen(450, 0, 0), 550)), 2, 0, 0, 0), 2);
   EXPECT_EQ(decide(half_read, cfg).outcome, CandidateOutcome::accepted);  // 450 of 500 counted
   cfg.verify_min_read_share = 1;  // off: unread pixels count against the pose

@@ -253,7 +253,6 @@ void read_locate(Section& s, LocateConfig* c) {
   s.real("ambiguity_pose_mm", &c->ambiguity_pose_mm, 0, 1000, "mm");
   s.real("ambiguity_quality_margin", &c->ambiguity_quality_margin, 0, 1, "share");
   s.boolean("tell_rivals_apart", &c->tell_rivals_apart);
-  s.boolean("rival_beaten_by_pixels", &c->rival_beaten_by_pixels);
   s.integer("verify_hypotheses", &c->verify_hypotheses, 1, 24, "fits per region");
   s.boolean("judge_rolls", &c->judge_rolls);
   s.real("roll_ambiguity_mm", &c->roll_ambiguity_mm, 0, 1000, "mm");

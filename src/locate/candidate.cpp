@@ -278,15 +278,7 @@ Decision decide(const Evidence& given, const LocateConfig& cfg) {
   // pipe in front or the image's edge (17-coil, 12 bins, room for 32 candidates: 11 wrong picks).
   const int best_ends_shown =
       e.ends_must_pin ? e.best.ends_seen_ending - 2 * e.best.ends_continued : ends_shown(e.best);
-  // Beyond the paper: a rival the image confirms worse is beaten only where the pixels telling the
-  // two apart are enough to say so (kMinTellingPx, either way); where fewer are, the difference
-  // lies in the rims and the noise, and the rival is as good. A 9.1 mm bend 1.1 m under the
-  // Kinect-class sensor, its twin's ends within 2-6 mm of its own, was handed out end for end,
-  // agreeing 0.98 to the right pose's 0.95 with no pixel telling them apart (tools/zoo --seed 21,
-  // 23-planar; 11-S-asym's wrong pick while clearing went too).
-  const bool untold =
-      cfg.tell_rivals_apart && cfg.rival_beaten_by_pixels && e.told.for_a + e.told.for_b < kMinTellingPx;
-  out.ambiguous = e.have_second && (as_good(e.second, e.best, cfg) || untold) &&
+  out.ambiguous = e.have_second && as_good(e.second, e.best, cfg) &&
                   !(ends_tell && best_ends_shown > rival_ends_shown) && !told_apart;
   // Beyond the paper: a pipe that slides along itself is placed along its length only by an end
   // the image shows; where none is seen, or the tube goes on beyond one, the pose may be slid.
@@ -831,10 +823,8 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
     }
   }
   // Beyond the paper: where the best and a rival about as good differ (a near twin's longer leg,
-  // a slid pose's ends), which one the image shows (decide() weighs it with the ends); and of a
-  // rival judged worse, whether any pixels say so (rival_beaten_by_pixels).
-  if (cfg.tell_rivals_apart && have_best && have_second &&
-      (cfg.rival_beaten_by_pixels || as_good(second.check, best.check, cfg))) {
+  // a slid pose's ends), which one the image shows (decide() weighs it with the ends).
+  if (cfg.tell_rivals_apart && have_best && have_second && as_good(second.check, best.check, cfg)) {
     const auto t0 = Clock::now();
     const PixelBox box_best = render_depth_in_box(lm.verify_mesh, best.model_to_cam, ctx.camera,
                                                   &buf->scratch_depth, &buf->scratch_mesh, lm.verify_winding);

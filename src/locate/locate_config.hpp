@@ -165,9 +165,6 @@ struct LocateConfig {
                                            // (kMinTellingPx pixels at telling_tolerance_mm) and at most a
                                            // quarter as much for the rival
                                            // (not for a pipe that slides along itself: its ends place it)
-  bool rival_beaten_by_pixels = true;      // a rival judged worse is as good where fewer than
-                                           // kMinTellingPx pixels tell the two apart (needs
-                                           // tell_rivals_apart)
   bool judge_rolls = true;        // the found pose turned about the pipe's own length by quarter turns
   double roll_ambiguity_mm = 5;   // ... a turn the image confirms as well that moves the pick further
                                   // than this (the pick-correct tolerance): ambiguous
@@ -218,7 +215,6 @@ inline void use_paper_search(LocateConfig* c) {
   c->slides_placed_first = false;
   c->place_slides_finely = false;
   c->follow_slides_to_ends = false;
-  c->rival_beaten_by_pixels = false;
   c->ends_read_further = false;
   c->judge_rolls = false;
   c->residual_rescue_of_rth = 1;
