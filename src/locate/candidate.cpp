@@ -729,19 +729,24 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
     }
   }
   // A pose moved along its pipe is judged by the pixels the image confirms less those it sees
-  // through (follow_slides_to_ends, place_slides_finely).
+  // through (follow_slides_to_ends, place_slides_finely) ...
   const auto confirmed_less_seen_through = [](const Verification& v) { return v.agree_px - v.free_space_px; };
+  // ... and, where it replaces the best, a second it now lies within the ambiguity distance of
+  // is the same reading, no rival.
+  const auto moved_best_to = [&](const PipeEstimate& moved) {
+    best = moved;
+    if (have_second && !rivals(best, second)) have_second = false;
+  };
   // Beyond the paper: a pose of a pipe that slides along itself, beyond one of whose ends the
   // tube goes on and neither of which the image pins, lies slid along its pipe; the slides
   // judged above reach at most 5 steps, and refined, a slid pose slides back along the strip. It
   // is moved along itself by D, 2 D, ... both ways as far as the far slides (follow_slides) and,
   // where the image accepts the moved pose and shows one of its ends ending outright, none going
-  // on, put where the image confirms the most of it and sees through the least of it; the second
-  // is dropped where it is no longer a rival (the same reading). A pose pinned only past a
-  // hidden tip is not taken: a 758 mm arc so followed was handed out 13 mm along its arc while
-  // clearing (tools/zoo --seed 20, 14-arc). On the held-out zoos (1 bin each) 6 more pipes
-  // taken while clearing bins of arcs and straight tubes, and a wrong pick of 14-arc gone
-  // (docs/experiments.md).
+  // on, put where the image confirms the most of it and sees through the least of it. A pose
+  // pinned only past a hidden tip is not taken: a 758 mm arc so followed was handed out 13 mm
+  // along its arc while clearing (tools/zoo --seed 20, 14-arc). On the held-out zoos (1 bin each)
+  // 6 more pipes taken while clearing bins of arcs and straight tubes, and a wrong pick of 14-arc
+  // gone (docs/experiments.md).
   if (cfg.follow_slides_to_ends && have_best && !lm.follow_slides.empty() && shown_slid(best.check) &&
       !deadline.passed()) {
     const Pose found = best.model_to_bin;
@@ -760,10 +765,7 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
           confirmed_less_seen_through(slid.check) > confirmed_less_seen_through(followed.check))
         followed = slid, have_followed = true;
     }
-    if (have_followed) {
-      best = followed;
-      if (have_second && !rivals(best, second)) have_second = false;
-    }
+    if (have_followed) moved_best_to(followed);
     buf->times.verify_ms += ms_since(t0);
   }
   // Beyond the paper: a pipe that slides along itself is placed along its length by its ends, and
@@ -798,10 +800,8 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
       slid.check = best_slide_check;
       read_ends_and_floor(&slid);
       if (turn_may_replace(slid.check, best.check) &&
-          slid.check.ends_seen_ending >= best.check.ends_seen_ending) {
-        best = slid;
-        if (have_second && !rivals(best, second)) have_second = false;
-      }
+          slid.check.ends_seen_ending >= best.check.ends_seen_ending)
+        moved_best_to(slid);
     }
     buf->times.verify_ms += ms_since(t0);
   }
