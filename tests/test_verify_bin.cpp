@@ -425,6 +425,61 @@ TEST(BinAwareVerification, AnEndHiddenUnderAPipeAcrossIsNotShownEnding) {
   EXPECT_EQ(ends(covered, true).ends_seen_ending, 1);
 }
 
+// The tip of an end the tube reaches at a slant to the image (a 3-D pipe's leg coming down to the
+// floor, 50 degrees) shows the camera its surface D / 2 over the cosine of the slant from the
+// centreline: read D / 2 from it, the tube's own top in front hides the tip, and the end the
+// image shows ending is not shown (ends_read_slanted). A tube going on beyond such an end is not
+// pinned by reading it so.
+TEST(BinAwareVerification, ASlantedTubesTipIsShownWhereItsSurfaceFacesTheCamera) {
+  const double d = 40, slant = 50 * EIGEN_PI / 180;
+  const PipeModel tube = pipe_of("S300", d, "tube"), longer = pipe_of("S600", d, "longer tube");
+  const LocateConfig cfg;
+  const LocatorModel lm = prepare_locator_model(tube, 8, cfg),
+                     lm_longer = prepare_locator_model(longer, 8, cfg);
+  const std::vector<Eigen::Vector3f>& line = lm.centreline_points;
+  const float tol = float(cfg.verify_tolerance_mm);
+  Intrinsics k;
+  k.width = 640, k.height = 480, k.fx = k.fy = 570, k.cx = 320, k.cy = 240;
+  // A tube's centreline from its first point on, across the image and away from the camera, from
+  // a high end 120 mm left of the image's centre (the floor 1005 mm away, the tube's low tip 40 mm
+  // over it).
+  const Eigen::Vector3d down_the_leg(std::cos(slant), 0, std::sin(slant));
+  const auto placed = [&](const std::vector<Eigen::Vector3f>& centreline) {
+    const Eigen::Vector3d along = (centreline.back() - centreline.front()).normalized().cast<double>();
+    Pose pose = Pose::Identity();
+    pose.linear() = Eigen::Quaterniond::FromTwoVectors(along, down_the_leg).toRotationMatrix();
+    pose.translation() = Eigen::Vector3d(-120, 0, 965 - 300 * std::sin(slant)) -
+                         pose.linear() * centreline.front().cast<double>();
+    return pose;
+  };
+  const auto scene = [&](const PipeModel& pipe, const Pose& pose) {
+    ProjectedMesh projected;
+    projected.reserve(pipe.mesh);
+    Image<float> drawn(k.width, k.height, 0.0f);
+    const PixelBox box = render_depth_in_box(pipe.mesh, pose, k, &drawn, &projected);
+    Image<float> depth(k.width, k.height, 1005.0f);
+    for (int y = box.y0; y <= box.y1; ++y)
+      for (int x = box.x0; x <= box.x1; ++x)
+        if (drawn.at(x, y) > 0) depth.at(x, y) = std::min(drawn.at(x, y), depth.at(x, y));
+    return depth;
+  };
+  const Pose pose = placed(line);
+  const auto ends = [&](const Image<float>& depth, bool slanted) {
+    Verification v;
+    judge_ends(line, float(d), pose, depth, k, tol, &v, true, false, slanted);
+    return v;
+  };
+  const Image<float> alone = scene(tube, pose);
+  // The high end shown ending either way; the low one only where read slanted.
+  EXPECT_EQ(ends(alone, false).ends_pinned, 1);
+  EXPECT_EQ(ends(alone, true).ends_pinned, 2);
+  EXPECT_EQ(ends(alone, true).ends_continued, 0);
+  // A tube twice as long from the same first point: beyond the low end it goes on.
+  const Image<float> going_on = scene(longer, placed(lm_longer.centreline_points));
+  EXPECT_EQ(ends(going_on, false).ends_pinned, 1);
+  EXPECT_EQ(ends(going_on, true).ends_pinned, 1);
+}
+
 // A pipe that slides along itself is placed by its ends alone. Where nothing is read just beyond
 // an end (a coil's end tucked in the shadow of its own next turn), the image is read 2 D further
 // along the bend (ends_read_further): the floor there pins the end; the tube going on round the

@@ -564,7 +564,7 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
     if (cfg.pin_slides_by_ends)
       judge_ends(lm.centreline_points, lm.tube_d_mm, e->model_to_cam, ctx.depth, ctx.camera,
                  float(cfg.verify_tolerance_mm), &e->check, lm.slides.empty(),
-                 cfg.ends_read_further && !lm.slides.empty());
+                 cfg.ends_read_further && !lm.slides.empty(), cfg.ends_read_slanted);
     if (!std::isnan(ctx.lowest_surface_z_mm))
       e->check.below_floor = share_below(lm.verify_mesh, e->model_to_bin,
                                          ctx.lowest_surface_z_mm - kBelowFloorOfD * lm.tube_d_mm);

@@ -177,6 +177,8 @@ struct LocateConfig {
                                    // pipe's ends are read (off: none)
   bool ends_read_further = true;   // ... and where nothing is read just beyond a sliding pipe's
                                    // end, the image is read 2 D beyond along its bend
+  bool ends_read_slanted = true;   // ... and the tip of an end the tube reaches at a slant to the
+                                   // image is read where such a tube shows its surface (judge_ends)
   bool slides_placed_first = true;  // ... and of two of its hypotheses the image confirms about as
                                     // well, one its ends place goes before one they show slid
                                     // (with judge_slides: its slid rivals check the pose put first)
@@ -216,6 +218,7 @@ inline void use_paper_search(LocateConfig* c) {
   c->place_slides_finely = false;
   c->follow_slides_to_ends = false;
   c->ends_read_further = false;
+  c->ends_read_slanted = false;
   c->judge_rolls = false;
   c->residual_rescue_of_rth = 1;
   c->short_region_min_extent_of_l = c->region_min_extent_of_l;

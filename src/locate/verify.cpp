@@ -19,6 +19,9 @@ constexpr float kTipProbesOfD[] = {0.0f, 0.5f};
 constexpr float kFurtherProbeOfD = 2.0f;
 // ... taken as straight where it bends on a circle wider than this many D.
 constexpr float kStraightBendOfD = 20.0f;
+// With slanted, a tube's surface along the camera's ray is read at most 1 / this root farther from
+// its centreline than D / 2 (as a tube slanted 60 degrees to the image).
+constexpr float kLeastCosineSquared = 0.25f;
 
 // Where the centreline, going on beyond its point `end` as it bends on the circle through the
 // points `in`, `mid` and `end`, lies `s_mm` beyond it (model frame; a straight line where the
@@ -155,7 +158,7 @@ Verification verify_pose(const Mesh& mesh, Winding winding, const Pose& model_to
 
 void judge_ends(const std::vector<Eigen::Vector3f>& centreline, float d, const Pose& model_to_cam,
                 const Image<float>& depth, const Intrinsics& k, float tol, Verification* v,
-                bool tip_must_show, bool read_further) {
+                bool tip_must_show, bool read_further, bool slanted) {
   v->ends_pinned = v->ends_continued = v->ends_seen_ending = 0;
   const int n = int(centreline.size());
   if (n < 2) return;
@@ -175,11 +178,17 @@ void judge_ends(const std::vector<Eigen::Vector3f>& centreline, float d, const P
     Eigen::Vector3f out = r * (centreline[end] - centreline[in]);
     if (!(out.norm() > 0.25f * d)) continue;
     out.normalize();
-    // The depth measured where the tube's surface around the centreline point `centre` faces
-    // the camera, and that surface's depth; no reading: 0.
-    const auto probe_at = [&](const Eigen::Vector3f& centre, float* facing_z) {
+    // How far from the centreline the tube shows the camera its surface at its tip: D / 2, or with
+    // slanted, D / 2 over the cosine of its slant to the image there. (Beyond the tip, where a tube
+    // going on would lie, it is read D / 2 from the line: a pin needs the surface there lower than
+    // a level tube's, however the pose slants.)
+    const float sine = slanted && tip.z() > 0 ? std::min(std::abs(out.dot(tip.normalized())), 1.0f) : 0.0f;
+    const float tip_surface_mm = 0.5f * d / std::sqrt(std::max(1.0f - sine * sine, kLeastCosineSquared));
+    // The depth measured where the tube's surface around the centreline point `centre`, `surface_mm`
+    // from it, faces the camera, and that surface's depth; no reading: 0.
+    const auto probe_at = [&](const Eigen::Vector3f& centre, float surface_mm, float* facing_z) {
       if (!(centre.z() > 0)) return 0.0f;
-      const Eigen::Vector3f facing = centre - 0.5f * d * centre.normalized();
+      const Eigen::Vector3f facing = centre - surface_mm * centre.normalized();
       const Eigen::Vector2d px = k.project(facing.cast<double>());
       const int x = int(std::lround(px.x())), y = int(std::lround(px.y()));
       *facing_z = facing.z();
@@ -187,7 +196,7 @@ void judge_ends(const std::vector<Eigen::Vector3f>& centreline, float d, const P
     };
     // ... `along` * D beyond the tip along the tube's way out (inside it where negative).
     const auto probe = [&](float along, float* facing_z) {
-      return probe_at(tip + along * d * out, facing_z);
+      return probe_at(tip + along * d * out, along > 0 ? 0.5f * d : tip_surface_mm, facing_z);
     };
     int free = 0, going_on = 0, probes = 0;
     const auto read = [&](float zo, float facing_z) {
@@ -211,7 +220,7 @@ void judge_ends(const std::vector<Eigen::Vector3f>& centreline, float d, const P
       const Eigen::Vector3f beyond = along_the_bend(centreline[in], centreline[inward(0.5f * d)],
                                                     centreline[end], kFurtherProbeOfD * d, d);
       float facing_z = 0;
-      const float zo = probe_at(r * beyond + t, &facing_z);
+      const float zo = probe_at(r * beyond + t, 0.5f * d, &facing_z);
       read(zo, facing_z);
       further_only = probes > 0;
     }
