@@ -411,7 +411,9 @@ TEST(BinAwareVerification, AnEndHiddenUnderAPipeAcrossIsNotShownEnding) {
   };
   const auto ends = [&](const Image<float>& depth, bool tip_must_show) {
     Verification v;
-    judge_ends(lm.centreline_points, d, pipe, depth, k, tol, &v, tip_must_show);
+    EndReading how;
+    how.tip_must_show = tip_must_show;
+    judge_ends(lm.centreline_points, d, pipe, depth, k, tol, &v, how);
     return v;
   };
   const Image<float> open = with_cover(false), covered = with_cover(true);
@@ -466,7 +468,10 @@ TEST(BinAwareVerification, ASlantedTubesTipIsShownWhereItsSurfaceFacesTheCamera)
   const Pose pose = placed(line);
   const auto ends = [&](const Image<float>& depth, bool slanted) {
     Verification v;
-    judge_ends(line, float(d), pose, depth, k, tol, &v, true, false, slanted);
+    EndReading how;
+    how.tip_must_show = true;
+    how.slanted = slanted;
+    judge_ends(line, float(d), pose, depth, k, tol, &v, how);
     return v;
   };
   const Image<float> alone = scene(tube, pose);
@@ -529,7 +534,9 @@ TEST(BinAwareVerification, AnEndWithNothingReadJustBeyondIsReadFurtherAlongItsBe
   };
   const auto ends = [&](const Image<float>& depth, bool read_further) {
     Verification v;
-    judge_ends(line, float(d), pose, depth, k, tol, &v, false, read_further);
+    EndReading how;
+    how.read_further = read_further;
+    judge_ends(line, float(d), pose, depth, k, tol, &v, how);
     return v;
   };
   const Image<float> alone = scene(arc), going_on = scene(longer);

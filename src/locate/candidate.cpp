@@ -560,11 +560,14 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
       cfg.refine_facing_only ? Eigen::Vector3f(ctx.bin_to_cam.inverse().translation().cast<float>())
                              : Eigen::Vector3f::Constant(NAN);
   // The image's reading of a pose's ends, and how much of it lies below the floor.
+  EndReading end_reading;
+  end_reading.tip_must_show = lm.slides.empty();
+  end_reading.read_further = cfg.ends_read_further && !lm.slides.empty();
+  end_reading.slanted = cfg.ends_read_slanted;
   const auto read_ends_and_floor = [&](PipeEstimate* e) {
     if (cfg.pin_slides_by_ends)
       judge_ends(lm.centreline_points, lm.tube_d_mm, e->model_to_cam, ctx.depth, ctx.camera,
-                 float(cfg.verify_tolerance_mm), &e->check, lm.slides.empty(),
-                 cfg.ends_read_further && !lm.slides.empty(), cfg.ends_read_slanted);
+                 float(cfg.verify_tolerance_mm), &e->check, end_reading);
     if (!std::isnan(ctx.lowest_surface_z_mm))
       e->check.below_floor = share_below(lm.verify_mesh, e->model_to_bin,
                                          ctx.lowest_surface_z_mm - kBelowFloorOfD * lm.tube_d_mm);
@@ -731,6 +734,14 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
   // A pose moved along its pipe is judged by the pixels the image confirms less those it sees
   // through (follow_slides_to_ends, place_slides_finely) ...
   const auto confirmed_less_seen_through = [](const Verification& v) { return v.agree_px - v.free_space_px; };
+  // ... judged where it lies, not refined again (refined, it would slide back) ...
+  const auto slid_best = [&](const Pose& found, const Pose& slide, const Verification& check) {
+    PipeEstimate slid = best;
+    slid.model_to_bin = found * slide;
+    slid.model_to_cam = ctx.bin_to_cam * slid.model_to_bin;
+    slid.check = check;
+    return slid;
+  };
   // ... and, where it replaces the best, a second it now lies within the ambiguity distance of
   // is the same reading, no rival.
   const auto moved_best_to = [&](const PipeEstimate& moved) {
@@ -754,11 +765,9 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
     PipeEstimate followed;
     bool have_followed = false;
     for (const Pose& s : lm.follow_slides) {
-      PipeEstimate slid = best;
-      slid.model_to_bin = found * s;
-      slid.model_to_cam = ctx.bin_to_cam * slid.model_to_bin;
-      slid.check = verify_at(slid.model_to_cam);
-      if (!image_accepts(slid.check, cfg)) continue;
+      const Verification v = verify_at(ctx.bin_to_cam * (found * s));
+      if (!image_accepts(v, cfg)) continue;
+      PipeEstimate slid = slid_best(found, s, v);
       read_ends_and_floor(&slid);
       if (!placed_by_ends(slid.check) || slid.check.ends_seen_ending == 0) continue;
       if (!have_followed ||
@@ -794,10 +803,7 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
         most = confirmed_less_seen_through(v), best_slide = &s, best_slide_check = v;
     }
     if (best_slide) {
-      PipeEstimate slid = best;  // judged where it lies, not refined again (it would slide back)
-      slid.model_to_bin = found * *best_slide;
-      slid.model_to_cam = ctx.bin_to_cam * slid.model_to_bin;
-      slid.check = best_slide_check;
+      PipeEstimate slid = slid_best(found, *best_slide, best_slide_check);
       read_ends_and_floor(&slid);
       if (turn_may_replace(slid.check, best.check) &&
           slid.check.ends_seen_ending >= best.check.ends_seen_ending)

@@ -12,7 +12,7 @@ namespace {
 constexpr int kSideStepPx = 2;
 // Where beyond a tube's end the image is read (shares of D along the centreline's direction).
 constexpr float kEndProbesOfD[] = {0.75f, 1.25f};
-// ... and the tube's own surface at its tip and this far inside it (tip_must_show).
+// ... and the tube's own surface at its tip and this far inside it (EndReading::tip_must_show).
 constexpr float kTipProbesOfD[] = {0.0f, 0.5f};
 // With read_further, where neither of those probes reads the way the tube would go on, one more
 // this far beyond (shares of D), along the bend the centreline's last D lies on ...
@@ -158,7 +158,7 @@ Verification verify_pose(const Mesh& mesh, Winding winding, const Pose& model_to
 
 void judge_ends(const std::vector<Eigen::Vector3f>& centreline, float d, const Pose& model_to_cam,
                 const Image<float>& depth, const Intrinsics& k, float tol, Verification* v,
-                bool tip_must_show, bool read_further, bool slanted) {
+                const EndReading& how) {
   v->ends_pinned = v->ends_continued = v->ends_seen_ending = 0;
   const int n = int(centreline.size());
   if (n < 2) return;
@@ -182,7 +182,8 @@ void judge_ends(const std::vector<Eigen::Vector3f>& centreline, float d, const P
     // slanted, D / 2 over the cosine of its slant to the image there. (Beyond the tip, where a tube
     // going on would lie, it is read D / 2 from the line: a pin needs the surface there lower than
     // a level tube's, however the pose slants.)
-    const float sine = slanted && tip.z() > 0 ? std::min(std::abs(out.dot(tip.normalized())), 1.0f) : 0.0f;
+    const float sine =
+        how.slanted && tip.z() > 0 ? std::min(std::abs(out.dot(tip.normalized())), 1.0f) : 0.0f;
     const float tip_surface_mm = 0.5f * d / std::sqrt(std::max(1.0f - sine * sine, kLeastCosineSquared));
     // The depth measured where the tube's surface around the centreline point `centre`, `surface_mm`
     // from it, faces the camera, and that surface's depth; no reading: 0.
@@ -216,7 +217,7 @@ void judge_ends(const std::vector<Eigen::Vector3f>& centreline, float d, const P
     // (a coil lying alone on the zoo's bin floor, neither end read, was left ambiguous:
     // docs/experiments.md, "A sliding pipe's end read further along its bend").
     bool further_only = false;
-    if (probes == 0 && read_further) {
+    if (probes == 0 && how.read_further) {
       const Eigen::Vector3f beyond = along_the_bend(centreline[in], centreline[inward(0.5f * d)],
                                                     centreline[end], kFurtherProbeOfD * d, d);
       float facing_z = 0;
@@ -231,7 +232,7 @@ void judge_ends(const std::vector<Eigen::Vector3f>& centreline, float d, const P
       const float zo = probe(-inside, &facing_z);
       tip_hidden = tip_hidden || (zo > 0 && zo < facing_z - tol);
     }
-    const bool pinned = free == probes && !(tip_must_show && tip_hidden);
+    const bool pinned = free == probes && !(how.tip_must_show && tip_hidden);
     v->ends_pinned += pinned;
     v->ends_seen_ending += pinned && !tip_hidden && probes == int(std::size(kEndProbesOfD)) && !further_only;
     v->ends_continued += going_on == probes;

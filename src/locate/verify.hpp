@@ -90,19 +90,24 @@ Verification verify_pose(const Mesh& mesh, Winding winding, const Pose& model_to
 // centreline (model frame, ordered from one end to the other; tube diameter d_mm), the surface a
 // continued tube would show the camera is compared with the depth measured there: farther than
 // tolerance_mm is an end the image pins, within it a tube going on. Fills ends_pinned and
-// ends_continued (and ends_seen_ending) of *v. With tip_must_show, an end is pinned only where nothing lies
-// in front of the tube at its tip and half a diameter inside it: an end hidden under another pipe is not
-// shown ending there, whatever lies beyond. With read_further, an end whose two probes read
-// nothing of the way on (no reading, something in front) is read once more, 2 D beyond along the
-// bend its centreline's last D lies on; pinned or continued by that probe alone, it is not seen
-// ending outright.
-// With slanted (Beyond the paper), the tip of an end the tube reaches at a slant to the image (a
-// 3-D pipe's leg coming down to the floor) is read where such a tube shows the camera its surface:
-// along the camera's ray through its centreline, D / 2 over the cosine of its slant from it (read
-// D / 2 from it, the tube's own top in front hides a tip the image shows).
+// ends_continued (and ends_seen_ending) of *v, read as `how` says.
+struct EndReading {
+  // An end is pinned only where nothing lies in front of the tube at its tip and half a diameter
+  // inside it: an end hidden under another pipe is not shown ending there, whatever lies beyond.
+  bool tip_must_show = false;
+  // An end whose two probes read nothing of the way on (no reading, something in front) is read
+  // once more, 2 D beyond along the bend its centreline's last D lies on; pinned or continued by
+  // that probe alone, it is not seen ending outright.
+  bool read_further = false;
+  // Beyond the paper: the tip of an end the tube reaches at a slant to the image (a 3-D pipe's leg
+  // coming down to the floor) is read where such a tube shows the camera its surface: along the
+  // camera's ray through its centreline, D / 2 over the cosine of its slant from it (read D / 2
+  // from it, the tube's own top in front hides a tip the image shows).
+  bool slanted = false;
+};
 void judge_ends(const std::vector<Eigen::Vector3f>& centreline, float d_mm, const Pose& model_to_cam,
                 const Image<float>& depth_mm, const Intrinsics& k, float tolerance_mm, Verification* v,
-                bool tip_must_show = false, bool read_further = false, bool slanted = false);
+                const EndReading& how = {});
 // Whether judge_ends can tell two poses of one centreline (model frame, tube diameter d_mm) apart:
 // with their ends paired so that they lie closest, an end of one lies farther from the other's
 // than the first probe beyond an end reaches. Nearer, both poses' probes read beyond the same end
