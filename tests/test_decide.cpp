@@ -68,6 +68,12 @@ Evidence seen_ending(Evidence e, int n) {
   return e;
 }
 
+// Of the best's ends, `n` whose tip lies outside the sensor's view: the image cannot show them.
+Evidence ends_out_of_view(Evidence e, int n) {
+  e.best.ends_out_of_view = n;
+  return e;
+}
+
 // Ends read for the best and its rival (a model with a near twin): pinned and continued each.
 Evidence ends_read(Evidence e, int best_pinned, int best_continued, int second_pinned, int second_continued) {
   e.ends_judged = true;
@@ -266,6 +272,17 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
       {"a third out of the view, ends read, one pinned",
        ends_read(judged(outside_view(seen(950, 0, 0), 0.35f)), 1, 0, 0, 0), true, CandidateOutcome::accepted,
        false, true, 0.6175f},
+      // ... unless both ends lie out of the view, where no image shows them: the bends in view
+      // place a pipe that does not slide along itself.
+      {"a third out of the view, well seen, both ends out of it",
+       ends_out_of_view(ends_read(judged(outside_view(seen(950, 0, 0), 0.35f)), 0, 0, 0, 0), 2), true,
+       CandidateOutcome::accepted, false, true, 0.6175f},
+      {"the same, one end out of it, the other not pinned",
+       ends_out_of_view(ends_read(judged(outside_view(seen(950, 0, 0), 0.35f)), 0, 0, 0, 0), 1), true,
+       CandidateOutcome::accepted, false, false, 0.6175f},
+      {"the same, both ends out of it, what is in view not well seen",
+       ends_out_of_view(ends_read(judged(outside_view(seen(880, 0, 0), 0.35f)), 0, 0, 0, 0), 2), true,
+       CandidateOutcome::accepted, false, false, 0.572f},
       // From a region shorter than a * L only for a pipe that does not slide along itself, its
       // ends read and one pinned: where a sliding pipe lies along what is out of the view, a short
       // piece of its top does not say.

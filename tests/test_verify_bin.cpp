@@ -324,6 +324,32 @@ TEST(BinAwareVerification, EndsTellPosesApartOnlyWhereTheyLieBeyondTheFirstProbe
   EXPECT_FALSE(ends_tell_apart(line, d, truth, turned));
 }
 
+// An end whose tip lies outside the sensor's view (beyond the image, or in the band an active
+// sensor does not read) is counted as such: no image can show it ending (decide() does not ask
+// for it where both ends lie there).
+TEST(BinAwareVerification, AnEndWhoseTipLiesOutOfTheViewIsCountedSo) {
+  TubeOnFloor tube;
+  const Intrinsics& k = tube.s.camera.intrinsics;
+  const std::vector<Eigen::Vector3f>& line = tube.lm.centreline_points;
+  Pose m2w = Pose::Identity();
+  m2w.translation() = Eigen::Vector3d(-75, 0, kTubeMm / 2);
+  const Pose m2c = *tube.s.camera.world_to_cam * m2w;
+  const auto ends = [&](const PixelBox* view) {
+    Verification v;
+    judge_ends(line, float(kTubeMm), m2c, tube.s.depth, k, 7.0f, &v, EndReading{}, view);
+    return v;
+  };
+  const double x_a = k.project(m2c * line.front().cast<double>()).x();
+  const double x_b = k.project(m2c * line.back().cast<double>()).x();
+  const int left = int(std::floor(std::min(x_a, x_b))), right = int(std::ceil(std::max(x_a, x_b)));
+  EXPECT_EQ(ends(nullptr).ends_out_of_view, 0);
+  EXPECT_EQ(ends(nullptr).ends_pinned, 2);
+  const PixelBox past_one{left + 2, 0, k.width - 1, k.height - 1};
+  EXPECT_EQ(ends(&past_one).ends_out_of_view, 1);
+  const PixelBox between{left + 2, 0, right - 2, k.height - 1};
+  EXPECT_EQ(ends(&between).ends_out_of_view, 2);
+}
+
 // On a simulated bin (floor at z = 0) the floor is found, a pipe's pose lies on it, and the same
 // pose four diameters lower lies under it.
 // A bend with legs of 85 and 104 mm and its near twin (turned end for end: its legs swapped).

@@ -40,7 +40,8 @@ Json verification_json(const Verification& v) {
           {"side_px", v.side_px},
           {"ends_pinned", v.ends_pinned},
           {"ends_continued", v.ends_continued},
-          {"ends_seen_ending", v.ends_seen_ending}};
+          {"ends_seen_ending", v.ends_seen_ending},
+          {"ends_out_of_view", v.ends_out_of_view}};
 }
 
 Json estimate_json(const PipeEstimate& e, int rank, bool pick) {

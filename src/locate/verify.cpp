@@ -158,8 +158,9 @@ Verification verify_pose(const Mesh& mesh, Winding winding, const Pose& model_to
 
 void judge_ends(const std::vector<Eigen::Vector3f>& centreline, float d, const Pose& model_to_cam,
                 const Image<float>& depth, const Intrinsics& k, float tol, Verification* v,
-                const EndReading& how) {
-  v->ends_pinned = v->ends_continued = v->ends_seen_ending = 0;
+                const EndReading& how, const PixelBox* view) {
+  v->ends_pinned = v->ends_continued = v->ends_seen_ending = v->ends_out_of_view = 0;
+  const PixelBox seen = view ? *view : PixelBox{0, 0, depth.width - 1, depth.height - 1};
   const int n = int(centreline.size());
   if (n < 2) return;
   const Eigen::Matrix3f r = model_to_cam.linear().cast<float>();
@@ -175,6 +176,10 @@ void judge_ends(const std::vector<Eigen::Vector3f>& centreline, float d, const P
     // The way out of the tube at this end: from the centreline point about D inside it.
     const int in = inward(d);
     const Eigen::Vector3f tip = r * centreline[end] + t;
+    if (const Eigen::Vector2d px = k.project(tip.cast<double>());
+        !(tip.z() > 0 && px.x() >= seen.x0 && px.y() >= seen.y0 && px.x() < seen.x1 + 1 &&
+          px.y() < seen.y1 + 1))
+      ++v->ends_out_of_view;
     Eigen::Vector3f out = r * (centreline[end] - centreline[in]);
     if (!(out.norm() > 0.25f * d)) continue;
     out.normalize();

@@ -57,6 +57,8 @@ struct Verification {
   // ... of the pinned ends, those seen ending outright: the tip shown and every probe beyond it
   // read, lower (with tip_must_show every pinned end whose probes all read).
   int ends_seen_ending = 0;
+  // ... and the ends whose tip lies outside the sensor's view: the image cannot show them.
+  int ends_out_of_view = 0;
 };
 
 // A pose is under the floor when more than this share of its model lies more than this * D below
@@ -107,7 +109,7 @@ struct EndReading {
 };
 void judge_ends(const std::vector<Eigen::Vector3f>& centreline, float d_mm, const Pose& model_to_cam,
                 const Image<float>& depth_mm, const Intrinsics& k, float tolerance_mm, Verification* v,
-                const EndReading& how = {});
+                const EndReading& how = {}, const PixelBox* view = nullptr);
 // Whether judge_ends can tell two poses of one centreline (model frame, tube diameter d_mm) apart:
 // with their ends paired so that they lie closest, an end of one lies farther from the other's
 // than the first probe beyond an end reaches. Nearer, both poses' probes read beyond the same end
