@@ -23,6 +23,16 @@ constexpr float kStraightBendOfD = 20.0f;
 // its centreline than D / 2 (as a tube slanted 60 degrees to the image).
 constexpr float kLeastCosineSquared = 0.25f;
 
+// The pixels the sensor reads (read_view()), or the whole image where none is given.
+PixelBox view_or_image(const PixelBox* view, int width, int height) {
+  return view ? *view : PixelBox{0, 0, width - 1, height - 1};
+}
+
+// The image point (x, y) lies in `view` (each pixel's whole area: up to x1 + 1).
+bool in_view(const PixelBox& view, double x, double y) {
+  return x >= view.x0 && y >= view.y0 && x < view.x1 + 1 && y < view.y1 + 1;
+}
+
 // Where the centreline, going on beyond its point `end` as it bends on the circle through the
 // points `in`, `mid` and `end`, lies `s_mm` beyond it (model frame; a straight line where the
 // three are (nearly) in line).
@@ -74,15 +84,10 @@ Verification verify_pose(const Mesh& mesh, Winding winding, const Pose& model_to
   Verification v;
   v.box = render_depth_in_box(mesh, model_to_cam, k, scratch, projected, winding);
   const PixelBox& box = v.box;
-  const PixelBox seen = view ? *view : PixelBox{0, 0, k.width - 1, k.height - 1};
-  const auto in_view = [&](double x, double y) {
-    return x >= seen.x0 && y >= seen.y0 && x < seen.x1 + 1 && y < seen.y1 + 1;
-  };
+  const PixelBox seen = view_or_image(view, k.width, k.height);
   int outside = 0;
-  for (std::size_t i = 0; i < mesh.vertices.size() && projected->cam.size() >= mesh.vertices.size(); ++i) {
-    const Eigen::Vector2d& px = projected->px[i];
-    outside += !(projected->cam[i].z() > 0 && in_view(px.x(), px.y()));
-  }
+  for (std::size_t i = 0; i < mesh.vertices.size() && projected->cam.size() >= mesh.vertices.size(); ++i)
+    outside += !(projected->cam[i].z() > 0 && in_view(seen, projected->px[i].x(), projected->px[i].y()));
   v.outside_view = mesh.vertices.empty() ? 0.f : float(outside) / float(mesh.vertices.size());
   const auto model_at = [&](int x, int y) { return drawn_mm(*scratch, box, x, y) > 0; };
   // A side pixel: beyond the rim at (x, y) in direction (dx, dy), not on the model; beyond the
@@ -105,7 +110,7 @@ Verification verify_pose(const Mesh& mesh, Winding winding, const Pose& model_to
   for (int y = box.y0; y <= box.y1; ++y)
     for (int x = box.x0; x <= box.x1; ++x) {
       const float zm = scratch->at(x, y);
-      if (zm <= 0 || !in_view(x, y)) continue;
+      if (zm <= 0 || !in_view(seen, x, y)) continue;
       // The silhouette's rim is left out: lateral noise mixes it with the background. Beyond it
       // the sides are read (the rim is rare: the interior takes the short test).
       if (x == box.x0 || y == box.y0 || x == box.x1 || y == box.y1 || scratch->at(x - 1, y) <= 0 ||
@@ -160,7 +165,7 @@ void judge_ends(const std::vector<Eigen::Vector3f>& centreline, float d, const P
                 const Image<float>& depth, const Intrinsics& k, float tol, Verification* v,
                 const EndReading& how, const PixelBox* view) {
   v->ends_pinned = v->ends_continued = v->ends_seen_ending = v->ends_out_of_view = 0;
-  const PixelBox seen = view ? *view : PixelBox{0, 0, depth.width - 1, depth.height - 1};
+  const PixelBox seen = view_or_image(view, depth.width, depth.height);
   const int n = int(centreline.size());
   if (n < 2) return;
   const Eigen::Matrix3f r = model_to_cam.linear().cast<float>();
@@ -176,10 +181,8 @@ void judge_ends(const std::vector<Eigen::Vector3f>& centreline, float d, const P
     // The way out of the tube at this end: from the centreline point about D inside it.
     const int in = inward(d);
     const Eigen::Vector3f tip = r * centreline[end] + t;
-    if (const Eigen::Vector2d px = k.project(tip.cast<double>());
-        !(tip.z() > 0 && px.x() >= seen.x0 && px.y() >= seen.y0 && px.x() < seen.x1 + 1 &&
-          px.y() < seen.y1 + 1))
-      ++v->ends_out_of_view;
+    const Eigen::Vector2d tip_px = k.project(tip.cast<double>());
+    v->ends_out_of_view += !(tip.z() > 0 && in_view(seen, tip_px.x(), tip_px.y()));
     Eigen::Vector3f out = r * (centreline[end] - centreline[in]);
     if (!(out.norm() > 0.25f * d)) continue;
     out.normalize();
