@@ -91,8 +91,9 @@ Verification verify_pose(const Mesh& mesh, Winding winding, const Pose& model_to
 // Beyond the paper: are the tube's ends where the image shows them? Beyond each end of the
 // centreline (model frame, ordered from one end to the other; tube diameter d_mm), the surface a
 // continued tube would show the camera is compared with the depth measured there: farther than
-// tolerance_mm is an end the image pins, within it a tube going on. Fills ends_pinned and
-// ends_continued (and ends_seen_ending) of *v, read as `how` says.
+// tolerance_mm is an end the image pins, within it a tube going on. Fills ends_pinned,
+// ends_continued and ends_seen_ending of *v, read as `how` says, and ends_out_of_view: the ends
+// whose tip lies outside `view` (the sensor's view, read_view(); the whole image where null).
 struct EndReading {
   // An end is pinned only where nothing lies in front of the tube at its tip and half a diameter
   // inside it: an end hidden under another pipe is not shown ending there, whatever lies beyond.
