@@ -228,6 +228,46 @@ TEST(PoseDistance, TwoEstimatesSharingTheTubeFarApartReadOnePipeTwoWays) {
   EXPECT_FALSE(read_two_ways(lm, a, beside, cfg));
 }
 
+// Beyond the paper: of one pipe's two readings wholly in the view (a bend and its half-turn twin,
+// the legs swapped: the tube in one place, the ends a leg's difference apart), the one whose ends
+// the image shows worse is refuted; where the ends do not tell, one reaches out of the view, the
+// image confirms one clearly better, or the two share less than half of the tube (two pipes end to
+// end), neither is.
+TEST(PoseDistance, OfTwoReadingsInTheViewTheEndsRefuteTheOneTheyShowWorse) {
+  LocateConfig cfg;
+  const PipeModel model = pipe_of("S85,B-134r188,S104", 23.3, "bend");
+  ASSERT_EQ(model.near_symmetries.size(), 1u);
+  const LocatorModel lm = prepare_locator_model(model, 8, cfg);
+  PipeEstimate a;
+  a.model_to_bin.translation() = Eigen::Vector3d(10, 20, 30);
+  a.check.model_px = 1000, a.check.agree_px = 970;
+  a.check.ends_pinned = a.check.ends_seen_ending = 2;
+  PipeEstimate twin = a;  // agreeing a little better, one end shown
+  twin.model_to_bin = a.model_to_bin * model.near_symmetries[0];
+  twin.check.agree_px = 980;
+  twin.check.ends_pinned = twin.check.ends_seen_ending = 1;
+  EXPECT_EQ(reading_its_ends_refute(lm, a, twin, cfg), 1);
+  EXPECT_EQ(reading_its_ends_refute(lm, twin, a, cfg), 0);
+  twin.check.ends_pinned = twin.check.ends_seen_ending = 2;
+  twin.check.ends_continued = 1;  // the tube goes on beyond one end
+  EXPECT_EQ(reading_its_ends_refute(lm, a, twin, cfg), 1);
+  twin.check.ends_continued = 0;  // the ends do not tell
+  EXPECT_EQ(reading_its_ends_refute(lm, a, twin, cfg), -1);
+  twin.check.ends_pinned = twin.check.ends_seen_ending = 1;
+  twin.check.outside_view = 0.1f;  // what tells them apart may lie out of the view
+  EXPECT_EQ(reading_its_ends_refute(lm, a, twin, cfg), -1);
+  twin.check.outside_view = 0;
+  twin.check.agree_px = 900;  // the image confirms a clearly better: no two readings
+  EXPECT_EQ(reading_its_ends_refute(lm, a, twin, cfg), -1);
+  twin.check.agree_px = 980;
+  PipeEstimate after = twin;  // end to end with a: a pipe of its own
+  const auto& c = lm.centreline_points;
+  after.model_to_bin.translation() += (a.model_to_bin.linear() * (c.back() - c.front()).cast<double>()) * 0.8;
+  EXPECT_EQ(reading_its_ends_refute(lm, a, after, cfg), -1);
+  cfg.pin_slides_by_ends = false;  // the ends not read
+  EXPECT_EQ(reading_its_ends_refute(lm, a, twin, cfg), -1);
+}
+
 // Beyond the paper: the turns judged about a pipe's own length. An elbow has three quarter turns
 // about the principal axis of its centreline, which each keep the centreline's centroid and axis
 // in place and four of which are no turn; a straight tube (the same pick turned) and an arc (placed

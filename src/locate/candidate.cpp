@@ -205,9 +205,11 @@ const char* outcome_name(CandidateOutcome o) {
   return "?";
 }
 
-bool read_two_ways(const LocatorModel& lm, const PipeEstimate& a, const PipeEstimate& b,
-                   const LocateConfig& cfg) {
-  if (!(a.check.outside_view > 0) && !(b.check.outside_view > 0)) return false;
+namespace {
+// Whether a and b put one pipe's tube in one place over kRivalMinSharedTube of it, further apart
+// than one pipe's duplicates, the image confirming them about as well.
+bool one_pipe_two_readings(const LocatorModel& lm, const PipeEstimate& a, const PipeEstimate& b,
+                           const LocateConfig& cfg) {
   const Eigen::Vector3d ca = a.model_to_bin * lm.centroid.cast<double>(),
                         cb = b.model_to_bin * lm.centroid.cast<double>();
   // Every point of a pipe lies within L (the longest distance between two) of its centroid: two
@@ -217,6 +219,30 @@ bool read_two_ways(const LocatorModel& lm, const PipeEstimate& a, const PipeEsti
   if (pose_distance_mm(lm, a.model_to_bin, b.model_to_bin, same_pipe_mm) <= same_pipe_mm) return false;
   return share_the_tube(lm, a.model_to_bin, b.model_to_bin) && as_good(a.check, b.check, cfg) &&
          as_good(b.check, a.check, cfg);
+}
+}  // namespace
+
+bool read_two_ways(const LocatorModel& lm, const PipeEstimate& a, const PipeEstimate& b,
+                   const LocateConfig& cfg) {
+  if (!(a.check.outside_view > 0) && !(b.check.outside_view > 0)) return false;
+  return one_pipe_two_readings(lm, a, b, cfg);
+}
+
+int reading_its_ends_refute(const LocatorModel& lm, const PipeEstimate& a, const PipeEstimate& b,
+                            const LocateConfig& cfg) {
+  if (a.check.outside_view > 0 || b.check.outside_view > 0 || !cfg.pin_slides_by_ends) return -1;
+  if (!one_pipe_two_readings(lm, a, b, cfg)) return -1;
+  // Half of the tube where the other has it, each way: two straight tubes touching end to end,
+  // each pose slid a little towards the other, share a quarter of it.
+  constexpr float kOneReadingMinSharedTube = 0.5f;
+  if (std::min(shared_tube(lm, a.model_to_bin, b.model_to_bin),
+               shared_tube(lm, b.model_to_bin, a.model_to_bin)) < kOneReadingMinSharedTube)
+    return -1;
+  const auto shown = [&](const Verification& v) {
+    return lm.slides.empty() ? ends_shown(v) : v.ends_seen_ending - 2 * v.ends_continued;
+  };
+  const int sa = shown(a.check), sb = shown(b.check);
+  return sa == sb ? -1 : sa < sb ? 0 : 1;
 }
 
 bool turn_may_replace(const Verification& turned, const Verification& found) {

@@ -169,7 +169,8 @@ struct LocateConfig {
   double roll_ambiguity_mm = 5;   // ... a turn the image confirms as well that moves the pick further
                                   // than this (the pick-correct tolerance): ambiguous
   bool rivals_across_regions = true;  // two regions' estimates that read one pipe two ways, the
-                                      // image confirming both about as well: both ambiguous
+                                      // image confirming both about as well: both ambiguous (both
+                                      // in view: the one whose ends show worse dropped)
   bool judge_slides = true;  // the found pose slid along the pipe itself (an arc about its centre,
                              // a coil along its helix, a straight run along its axis) is a rival too
   bool pin_slides_by_ends = true;  // a pipe that slides along itself is pickable only where the

@@ -374,10 +374,21 @@ void Locator::merge_estimate(int c) {
 // round its bend by one region and right by another, the first handed out while clearing). The
 // first searches' estimates, and the second searches' too where those run before the pick
 // (second_search_may_pick): after a pick, the second searches' poses are never handed out.
+// Wholly in the view, the reading whose ends the image shows worse is no estimate of the pipe
+// (reading_its_ends_refute): its region's outcome becomes "duplicate".
 void Locator::mark_pipes_read_two_ways() {
   auto& es = out_.estimates;
+  const auto dropped = [&](const PipeEstimate& e) {
+    return out_.traces[std::size_t(e.candidate)].outcome == CandidateOutcome::duplicate;
+  };
   for (std::size_t i = 0; i < es.size(); ++i)
-    for (std::size_t j = i + 1; j < es.size(); ++j) {
+    for (std::size_t j = i + 1; j < es.size() && !dropped(es[i]); ++j) {
+      if (dropped(es[j])) continue;
+      const int refuted = reading_its_ends_refute(lm_, es[i], es[j], cfg_);
+      if (refuted >= 0) {
+        out_.traces[std::size_t(es[refuted == 0 ? i : j].candidate)].outcome = CandidateOutcome::duplicate;
+        continue;
+      }
       if (!read_two_ways(lm_, es[i], es[j], cfg_)) continue;
       for (PipeEstimate* e : {&es[i], &es[j]}) {
         if (!e->ambiguous) e->score *= kAmbiguousScoreFactor;
@@ -385,6 +396,7 @@ void Locator::mark_pipes_read_two_ways() {
         e->pickable = e->unresolved = false;
       }
     }
+  es.erase(std::remove_if(es.begin(), es.end(), dropped), es.end());
 }
 
 CandidateContext Locator::context(const StartSet& starts, const LocateConfig& cfg, const Frame& f) const {
