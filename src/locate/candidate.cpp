@@ -86,6 +86,9 @@ bool as_good(const Verification& rival, const Verification& best, const LocateCo
 // How well the image shows a pose's ends where they are: an end pinned speaks for it, the tube
 // going on beyond an end (the pipe lies elsewhere along it) twice as much against.
 int ends_shown(const Verification& v) { return v.ends_pinned - 2 * v.ends_continued; }
+// ... and, for a pipe that slides along itself, only those seen ending outright count (a pin read
+// past a hidden tip or on one probe is where a slid coil's end meets a pipe in front).
+int ends_shown_outright(const Verification& v) { return v.ends_seen_ending - 2 * v.ends_continued; }
 
 // The agreement the checks for a confirmed pose judge. Beyond the paper: a pose the image places
 // by both its ends, each seen ending outright (the tip shown, every probe beyond it read and
@@ -239,7 +242,7 @@ int reading_its_ends_refute(const LocatorModel& lm, const PipeEstimate& a, const
                shared_tube(lm, b.model_to_bin, a.model_to_bin)) < kOneReadingMinSharedTube)
     return -1;
   const auto shown = [&](const Verification& v) {
-    return lm.slides.empty() ? ends_shown(v) : v.ends_seen_ending - 2 * v.ends_continued;
+    return lm.slides.empty() ? ends_shown(v) : ends_shown_outright(v);
   };
   const int sa = shown(a.check), sb = shown(b.check);
   return sa == sb ? -1 : sa < sb ? 0 : 1;
@@ -302,8 +305,7 @@ Decision decide(const Evidence& given, const LocateConfig& cfg) {
   // A pipe that slides along itself is told from its slid rival only by an end seen ending
   // outright: a pin read past a hidden tip or on one probe is where a slid coil's end meets a
   // pipe in front or the image's edge (17-coil, 12 bins, room for 32 candidates: 11 wrong picks).
-  const int best_ends_shown =
-      e.ends_must_pin ? e.best.ends_seen_ending - 2 * e.best.ends_continued : ends_shown(e.best);
+  const int best_ends_shown = e.ends_must_pin ? ends_shown_outright(e.best) : ends_shown(e.best);
   out.ambiguous = e.have_second && as_good(e.second, e.best, cfg) &&
                   !(ends_tell && best_ends_shown > rival_ends_shown) && !told_apart;
   // Beyond the paper: a pipe that slides along itself is placed along its length only by an end

@@ -196,11 +196,12 @@ bool better_reading(const Verification& a, const Verification& b, bool ends_plac
 bool read_two_ways(const LocatorModel& lm, const PipeEstimate& a, const PipeEstimate& b,
                    const LocateConfig& cfg);
 // Beyond the paper: of two such readings wholly in the view, each putting half of the tube where
-// the other has it, the one whose ends the image shows better (ends pinned, less twice those the tube goes on
-// beyond; for a pipe that slides along itself, ends seen ending outright) is the pipe, and the other no
-// estimate of it: a 9 mm J bend's reading slid round its bend, one end shown, agreeing 0.98, was handed out
-// 92 mm off before the right reading, both ends shown, agreeing 0.975 (23-planar of the zoo). Returns the
-// index (0: a, 1: b) of the reading the ends show worse, or -1 where they do not tell.
+// the other has it, the one whose ends the image shows better (ends pinned, less twice those the
+// tube goes on beyond; for a pipe that slides along itself, ends seen ending outright) is the pipe,
+// and the other no estimate of it: a 9 mm J bend's reading slid round its bend, one end shown,
+// agreeing 0.98, was handed out 92 mm off before the right reading, both ends shown, agreeing 0.975
+// (23-planar of the zoo). Returns the index (0: a, 1: b) of the reading the ends show worse, or -1
+// where they do not tell.
 int reading_its_ends_refute(const LocatorModel& lm, const PipeEstimate& a, const PipeEstimate& b,
                             const LocateConfig& cfg);
 
