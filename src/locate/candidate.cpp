@@ -209,10 +209,11 @@ const char* outcome_name(CandidateOutcome o) {
 }
 
 namespace {
-// Whether a and b put one pipe's tube in one place over kRivalMinSharedTube of it, further apart
-// than one pipe's duplicates, the image confirming them about as well.
+// Whether a and b, further apart than one pipe's duplicates and confirmed by the image about as
+// well, put one pipe's tube in one place: kRivalMinSharedTube of it one way or the other, or, where
+// each_way_share is given, at least that share of it each way.
 bool one_pipe_two_readings(const LocatorModel& lm, const PipeEstimate& a, const PipeEstimate& b,
-                           const LocateConfig& cfg) {
+                           const LocateConfig& cfg, float each_way_share = 0) {
   const Eigen::Vector3d ca = a.model_to_bin * lm.centroid.cast<double>(),
                         cb = b.model_to_bin * lm.centroid.cast<double>();
   // Every point of a pipe lies within L (the longest distance between two) of its centroid: two
@@ -220,8 +221,10 @@ bool one_pipe_two_readings(const LocatorModel& lm, const PipeEstimate& a, const 
   if ((ca - cb).norm() > 2.0 * double(lm.extent_l_mm) + double(lm.tube_d_mm)) return false;
   const float same_pipe_mm = kSamePipeOfD * lm.tube_d_mm;
   if (pose_distance_mm(lm, a.model_to_bin, b.model_to_bin, same_pipe_mm) <= same_pipe_mm) return false;
-  return share_the_tube(lm, a.model_to_bin, b.model_to_bin) && as_good(a.check, b.check, cfg) &&
-         as_good(b.check, a.check, cfg);
+  if (!as_good(a.check, b.check, cfg) || !as_good(b.check, a.check, cfg)) return false;
+  if (!(each_way_share > 0)) return share_the_tube(lm, a.model_to_bin, b.model_to_bin);
+  return shared_tube(lm, a.model_to_bin, b.model_to_bin) >= each_way_share &&
+         shared_tube(lm, b.model_to_bin, a.model_to_bin) >= each_way_share;
 }
 }  // namespace
 
@@ -234,13 +237,10 @@ bool read_two_ways(const LocatorModel& lm, const PipeEstimate& a, const PipeEsti
 int reading_its_ends_refute(const LocatorModel& lm, const PipeEstimate& a, const PipeEstimate& b,
                             const LocateConfig& cfg) {
   if (a.check.outside_view > 0 || b.check.outside_view > 0 || !cfg.pin_slides_by_ends) return -1;
-  if (!one_pipe_two_readings(lm, a, b, cfg)) return -1;
   // Half of the tube where the other has it, each way: two straight tubes touching end to end,
   // each pose slid a little towards the other, share a quarter of it.
   constexpr float kOneReadingMinSharedTube = 0.5f;
-  if (std::min(shared_tube(lm, a.model_to_bin, b.model_to_bin),
-               shared_tube(lm, b.model_to_bin, a.model_to_bin)) < kOneReadingMinSharedTube)
-    return -1;
+  if (!one_pipe_two_readings(lm, a, b, cfg, kOneReadingMinSharedTube)) return -1;
   const auto shown = [&](const Verification& v) {
     return lm.slides.empty() ? ends_shown(v) : ends_shown_outright(v);
   };
