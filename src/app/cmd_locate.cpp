@@ -126,6 +126,20 @@ void add_locate(CLI::App& app) {
                   {"refined_R", rotation_rowmajor(tr.refined_to_cam)},
                   {"refined_t_mm", translation_mm(tr.refined_to_cam)}};
         j.update(verification_json(tr.check));
+        // Every pose the candidate reached (camera frame), to trace a miss to the stage that lost it.
+        const auto reached_json = [&](const auto& poses, int n, const char* value) {
+          Json a = Json::array();
+          for (int k = 0; k < n; ++k) {
+            const Pose to_cam = bin_to_cam * poses[std::size_t(k)].model_to_bin;
+            a.push_back({{"R", rotation_rowmajor(to_cam)},
+                         {"t_mm", translation_mm(to_cam)},
+                         {value, poses[std::size_t(k)].value}});
+          }
+          return a;
+        };
+        j["ridge_fits"] = reached_json(tr.reached.fits, tr.reached.n_fits, "residual_mm");
+        j["hypotheses"] = reached_json(tr.reached.hypotheses, tr.reached.n_hypotheses, "agreement");
+        j["poses_left_out"] = tr.reached.left_out;
         std::cout << j.dump() << '\n';
       }
     }

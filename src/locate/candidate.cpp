@@ -552,7 +552,7 @@ RidgeFits fit_ridges(const CandidateContext& ctx, const CandidateInput& in, cons
 
 Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& in,
                             const ObservedRidge& observed, const RidgeFits& fitted, const Deadline& deadline,
-                            CandidateBuffers* buf) {
+                            CandidateBuffers* buf, TracedPoses* reached) {
   const LocateConfig& cfg = ctx.cfg;
   const LocatorModel& lm = ctx.lm;
   const std::vector<RidgeFit>& fits = buf->fits;
@@ -617,6 +617,7 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
     e.model_to_bin = refined.pose;
     e.model_to_cam = ctx.bin_to_cam * refined.pose;
     e.check = verify_at(e.model_to_cam);
+    reached->add_hypothesis(e.model_to_bin, e.check.agreement());
     // Beyond the paper: refined again on all the image shows of the pipe where this pose put it
     // (the region holds only its top strip, along which a leg can slide); kept if judged better.
     if (cfg.refine_on_explained &&
@@ -632,6 +633,7 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
         t0 = Clock::now();
         const Pose again_to_cam = ctx.bin_to_cam * again.pose;
         const Verification v = verify_at(again_to_cam);
+        reached->add_hypothesis(again.pose, v.agreement());
         if (hypothesis_quality(v) > hypothesis_quality(e.check)) {
           refined = again;
           refined_on = n;
@@ -908,11 +910,12 @@ bool work_candidate(const CandidateContext& ctx, const CandidateInput& in, const
   if (!fits.complete) return false;
   trace->ridge_pose = fits.best_pose;
   trace->ridge_cost_mm = fits.best_cost_mm;
+  for (const RidgeFit& f : buf->fits) trace->reached.add_fit(f.pose, f.cost_mm);
   evidence.reached = CandidateStage::ridge_fits;
   evidence.least_ridge_cost_mm = fits.least_cost_mm;
   if (settled()) return false;
 
-  const Hypotheses judged = judge_hypotheses(ctx, in, observed, fits, deadline, buf);
+  const Hypotheses judged = judge_hypotheses(ctx, in, observed, fits, deadline, buf, &trace->reached);
   if (!judged.complete) return false;
   evidence.reached = CandidateStage::hypotheses;
   evidence.have_best = judged.have_best, evidence.have_second = judged.have_second;

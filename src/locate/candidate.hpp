@@ -6,9 +6,9 @@
 #pragma once
 
 #include <algorithm>
-#include <cmath>
-
+#include <array>
 #include <atomic>
+#include <cmath>
 #include <vector>
 
 #include "core/camera.hpp"
@@ -93,6 +93,32 @@ enum class CandidateOutcome {
 };
 const char* outcome_name(CandidateOutcome o);
 
+// The poses a candidate reached on its way, for `locate --traces`: a missed pipe is traced to the
+// stage that lost it (docs/experiments.md, "The held-out misses by stage"). Fixed capacity: the
+// cycle fills them too, without allocating.
+struct TracedPose {
+  Pose model_to_bin = Pose::Identity();
+  float value = 0;  // a ridge fit's residual (mm), a hypothesis' agreement
+};
+struct TracedPoses {
+  static constexpr int kFits = 16, kHypotheses = 48;
+  std::array<TracedPose, kFits> fits;              // the ridge fits continued, best ranked first
+  std::array<TracedPose, kHypotheses> hypotheses;  // every refinement the image judged, in order
+  int n_fits = 0, n_hypotheses = 0;
+  int left_out = 0;  // beyond the capacity
+  void add_fit(const Pose& p, float cost_mm) { add(&fits, &n_fits, p, cost_mm); }
+  void add_hypothesis(const Pose& p, float agreement) { add(&hypotheses, &n_hypotheses, p, agreement); }
+
+ private:
+  template <std::size_t N>
+  void add(std::array<TracedPose, N>* to, int* n, const Pose& p, float value) {
+    if (*n < int(N))
+      (*to)[std::size_t((*n)++)] = {p, value};
+    else
+      ++left_out;
+  }
+};
+
 struct CandidateTrace {
   AxisEstimate axis;
   int ridge_begin = 0, ridge_count = 0;  // observed ridge points in Locator::ridge_points()
@@ -102,6 +128,7 @@ struct CandidateTrace {
   Verification check;                      // of the best refined fit
   CandidateOutcome outcome = CandidateOutcome::budget;
   bool searched_again = false;  // the outcome is the second search's, on the whole top surface
+  TracedPoses reached;          // of the first search and, where there was one, the second
 };
 
 // What decide() knows of a candidate: each stage adds its part.
@@ -302,7 +329,7 @@ struct Hypotheses {
 };
 Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& in,
                             const ObservedRidge& observed, const RidgeFits& fitted, const Deadline& deadline,
-                            CandidateBuffers* buf);
+                            CandidateBuffers* buf, TracedPoses* reached);
 
 // The stages in order, the deadline checked between them, decide() after each. Fills the trace;
 // returns true with the estimate when the candidate is accepted.

@@ -448,11 +448,14 @@ bool Locator::search_region_again(int c, Worker& wk, const Frame& f, const std::
   CandidateTrace retried;
   retried.ridge_begin = trace.ridge_begin;
   retried.searched_again = true;
+  retried.reached = trace.reached;  // the poses of both searches
   if (pipeloc::work_candidate(again, surface, Deadline{f.deadline_hard, cancel_, interrupt}, &wk.retry_buf,
                               &retried, &slot_[std::size_t(c)])) {
     slot_filled_[std::size_t(c)] = 1;
     trace = retried;
     std::copy_n(wk.retry_ridge.begin(), retried.ridge_count, ridge);
+  } else {
+    trace.reached = retried.reached;
   }
   return retried.outcome != CandidateOutcome::budget;
 }

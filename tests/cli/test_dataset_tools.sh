@@ -23,6 +23,13 @@ python3 - "$work/locate.jsonl" <<'PY' || fail "locate stdout is not JSON lines a
 import json, sys
 objects = [json.loads(line) for line in open(sys.argv[1]).read().splitlines()]
 assert any("outcome" in o for o in objects), "no candidate trace"
+# Each candidate's trace holds the poses it reached: its ridge fits and the hypotheses refined.
+traces = [o for o in objects if "outcome" in o]
+for t in traces:
+    for f in t["ridge_fits"] + t["hypotheses"]:
+        assert len(f["R"]) == 9 and len(f["t_mm"]) == 3, f
+    assert all("residual_mm" in f for f in t["ridge_fits"]) and all("agreement" in h for h in t["hypotheses"]), t
+assert any(t["ridge_fits"] and t["hypotheses"] for t in traces), "no candidate reports the poses it reached"
 PY
 grep -q "pipes found" "$work/locate.log" || fail "locate logs no summary on stderr: $(cat "$work/locate.log")"
 
