@@ -2,11 +2,7 @@
 # Bad inputs to the offline commands and serve (issue 21, item 7): each is refused with exit 2 and
 # a message naming the file (or option) and what was expected, never silence, a wrong answer or
 # a raw exception. Data made here with the simulator and a small PNG writer.
-set -euo pipefail
-bin="$1"
-work="$(mktemp -d)"
-trap 'rm -rf "$work"' EXIT
-fail() { echo "FAIL: $*" >&2; exit 1; }
+source "$(dirname "$0")/common.sh" "$@"
 passed=0
 
 # expect_refused WHAT PATTERN... -- CMD...: CMD exits 2 and its stderr matches every PATTERN.

@@ -1,11 +1,7 @@
 #!/usr/bin/env bash
 # The offline tools on a dataset the project makes itself: simulate -> eval-bop -> score, and
 # bench --dataset on the same frames; a missing dataset is refused with a message naming it.
-set -euo pipefail
-bin="$1"
-work="$(mktemp -d)"
-trap 'rm -rf "$work"' EXIT
-fail() { echo "FAIL: $*" >&2; exit 1; }
+source "$(dirname "$0")/common.sh" "$@"
 
 "$bin" make-pipe --preset u --out "$work/u.stl" > /dev/null 2>&1
 "$bin" simulate --model "$work/u.stl" --images 2 --pipes 8 --seed 3 --out "$work/ds" > /dev/null 2>&1

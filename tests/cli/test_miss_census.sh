@@ -1,12 +1,7 @@
 #!/usr/bin/env bash
 # tools/miss-census on a shape the simulator makes: every top pipe that `score --misses` lists is
 # classed once, by the poses `locate --traces` reports; a folder that is no shape is refused.
-set -euo pipefail
-bin="$1"
-here="$(cd "$(dirname "$0")/../.." && pwd)"
-work="$(mktemp -d)"
-trap 'rm -rf "$work"' EXIT
-fail() { echo "FAIL: $*" >&2; exit 1; }
+source "$(dirname "$0")/common.sh" "$@"
 
 # A long thin Z under the stereo sensor at 1.1 m: some top pipes are missed.
 mkdir -p "$work/z"

@@ -2,12 +2,7 @@
 # The zoo's machinery on two small shapes of two images: make-pipe -> simulate (both sensors) ->
 # eval-bop --picks -> score --picks, and two bins cleared through `serve` by the stand-in PLC. Checks
 # that the table is printed and every figure is in range; not how good the localizer is.
-set -euo pipefail
-bin="$1"
-here="$(cd "$(dirname "$0")/../.." && pwd)"
-work="$(mktemp -d)"
-trap 'rm -rf "$work"' EXIT
-fail() { echo "FAIL: $*" >&2; exit 1; }
+source "$(dirname "$0")/common.sh" "$@"
 
 "$here/tools/zoo" --bin "$bin" --out "$work/zoo" --shapes 15,20 --images 2 --jobs 2 --bins 2 \
   --json "$work/zoo.json" > "$work/zoo.txt" 2>&1 || fail "tools/zoo failed: $(tail -20 "$work/zoo.txt")"
