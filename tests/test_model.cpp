@@ -21,6 +21,27 @@ TEST(PipeModel, StraightTubeDiameterAndExtent) {
   EXPECT_NEAR(m.extent_mm, std::hypot(100.0, 20.0), 0.05);  // corner to opposite corner
 }
 
+// A share of a pipe somewhere (in the sensor's view, below the floor) is counted on its surface:
+// a straight tube's mesh has vertices only at its two ends, so its first quarter holds half of them
+// or none, while spread_surface_points() puts a quarter of the points there.
+TEST(PipeModel, SurfacePointsSpreadByAreaNotByVertex) {
+  PipeSpec spec;
+  spec.diameter_mm = 20;
+  spec.segments = parse_centreline("S400");
+  const PipeModel m = derive_pipe_model(make_pipe(spec), "straight");
+  float lo = 1e30f, hi = -1e30f;
+  for (const auto& v : m.mesh.vertices) lo = std::min(lo, v.x()), hi = std::max(hi, v.x());
+  const float quarter = lo + 0.25f * (hi - lo);
+  int vertices_in = 0;
+  for (const auto& v : m.mesh.vertices) vertices_in += v.x() < quarter;
+  EXPECT_NEAR(double(vertices_in) / double(m.mesh.vertices.size()), 0.5, 0.01);
+  const std::vector<Eigen::Vector3f> points = spread_surface_points(m.surface, 500);
+  EXPECT_NEAR(double(points.size()), 500, 10);
+  int points_in = 0;
+  for (const auto& p : points) points_in += p.x() < quarter;
+  EXPECT_NEAR(double(points_in) / double(points.size()), 0.25, 0.05);
+}
+
 TEST(PipeModel, PresetsMeasureTheirDiameterWhateverTheWinding) {
   for (const char* name : {"sbend", "u", "torus"}) {
     const PipeSpec spec = pipe_preset(name);

@@ -155,6 +155,15 @@ SurfaceSamples sample_surface(const Mesh& mesh, const std::vector<Eigen::Vector3
   return out;
 }
 
+std::vector<Eigen::Vector3f> spread_surface_points(const SurfaceSamples& surface, std::size_t count) {
+  // The samples are drawn independently by area, so every stride-th of them is spread so too.
+  const std::size_t stride =
+      std::max<std::size_t>(1, surface.points.size() / std::max<std::size_t>(1, count));
+  std::vector<Eigen::Vector3f> out;
+  for (std::size_t i = 0; i < surface.points.size(); i += stride) out.push_back(surface.points[i]);
+  return out;
+}
+
 float measure_tube_diameter(const Mesh& mesh, const std::vector<Eigen::Vector3f>& vn) {
   // On a swept tube the inward normal of a wall vertex passes through the centreline and meets
   // the opposite wall one diameter away; end caps and ring edges give outliers, hence the median.

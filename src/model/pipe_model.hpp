@@ -51,6 +51,10 @@ PipeModel load_pipe_model(const std::string& stl_path, const ModelDerivation& = 
 SurfaceSamples sample_surface(const Mesh& mesh, const std::vector<Eigen::Vector3f>& vertex_normals, int count,
                               unsigned seed);
 std::vector<Eigen::Vector3f> compute_vertex_normals(const Mesh& mesh);
+// About `count` of the surface samples, spread over the surface by area: for the share of a pipe
+// somewhere (out of the view, below the floor), which the mesh's vertices do not give (a straight
+// piece has vertices only at its ends, a bend many along it).
+std::vector<Eigen::Vector3f> spread_surface_points(const SurfaceSamples& surface, std::size_t count);
 // Flips the winding if the surface encloses negative volume, so face normals point outward.
 void orient_outward(Mesh* mesh);
 

@@ -9,6 +9,8 @@ namespace pipeloc {
 namespace {
 // A pick takes the pipe the pose was computed for when it is within the scorer's looser bound.
 constexpr double kPickMatchMm = 10.0;
+// Surface points a pipe's share in view is counted on (about 2 % apart in the share).
+constexpr std::size_t kInViewPoints = 500;
 
 // The camera's height above the bin floor (the world's z of its centre).
 double camera_height_mm(const Pose& world_to_cam) { return world_to_cam.inverse().translation().z(); }
@@ -29,6 +31,8 @@ SimSource::SimSource(const PipeModel& model, const SimSourceConfig& cfg)
   }
   for (std::size_t i = 0; i < model.mesh.vertices.size(); i += 4)
     vertices_.push_back(model.mesh.vertices[i].cast<double>());
+  for (const Eigen::Vector3f& p : spread_surface_points(model.surface, kInViewPoints))
+    surface_.push_back(p.cast<double>());
   // The tube's axis from every vertex: a subset need not be centred on it.
   std::vector<Eigen::Vector3d> all;
   for (const auto& v : model.mesh.vertices) all.push_back(v.cast<double>());
@@ -44,7 +48,7 @@ SimSource::~SimSource() {
 
 void SimSource::write_truth(std::uint64_t frame) {
   // {"frame": N, "bin": B, "camera_height_mm": H, "model_to_cam": [[R row-major (9), t mm (3)], ...],
-  //  "in_view": [share of each pipe's vertices in the sensor's view, ...]}; fprintf allocates nothing.
+  //  "in_view": [share of each pipe's surface in the sensor's view, ...]}; fprintf allocates nothing.
   std::fprintf(truth_, "{\"frame\":%llu,\"bin\":%d,\"camera_height_mm\":%.1f,\"model_to_cam\":[",
                (unsigned long long)frame, bins_, camera_height_mm(world_to_cam_));
   for (std::size_t i = 0; i < pile_.size(); ++i) {
@@ -61,13 +65,13 @@ void SimSource::write_truth(std::uint64_t frame) {
   for (std::size_t i = 0; i < pile_.size(); ++i) {
     const Pose p = world_to_cam_ * pile_[i];
     int inside = 0;
-    for (const Eigen::Vector3d& v : vertices_) {
+    for (const Eigen::Vector3d& v : surface_) {
       const Eigen::Vector3d c = p * v;
       inside += c.z() >= sensor.min_range_mm && c.z() <= sensor.max_range_mm &&
                 camera_and_projector_see(params_, c);
     }
     std::fprintf(truth_, "%s%.3f", i ? "," : "",
-                 vertices_.empty() ? 0.0 : double(inside) / double(vertices_.size()));
+                 surface_.empty() ? 0.0 : double(inside) / double(surface_.size()));
   }
   std::fprintf(truth_, "]}\n");
   std::fflush(truth_);

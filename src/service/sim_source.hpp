@@ -37,6 +37,7 @@ class SimSource : public FrameSource {
   SceneParams params_;
   std::mt19937 rng_;
   std::vector<Eigen::Vector3d> vertices_;  // for matching a picked pose to a pipe
+  std::vector<Eigen::Vector3d> surface_;   // spread by area, for the share of a pipe in view
   std::vector<Pose> pick_symmetries_;      // ... as the scorer does: a straight tube's turns too
   std::vector<Pose> pile_;                 // model -> world
   Pose world_to_cam_ = Pose::Identity();
