@@ -297,10 +297,12 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
       // ... unless both its ends are seen ending outright, none going on: a long arc whose middle
       // runs out of the view is placed by them.
       {"the same, sliding, both ends seen ending outright",
-       seen_ending(from_short_region(sliding(ends_read(judged(outside_view(seen(950, 0, 0), 0.35f)), 2, 0, 0, 0), 2, 0)), 2),
+       seen_ending(
+           from_short_region(sliding(ends_read(judged(outside_view(seen(950, 0, 0), 0.35f)), 2, 0, 0, 0), 2, 0)), 2),
        true, CandidateOutcome::accepted, false, true, 0.6175f},
       {"the same, sliding, one of its two pinned ends seen ending outright",
-       seen_ending(from_short_region(sliding(ends_read(judged(outside_view(seen(950, 0, 0), 0.35f)), 2, 0, 0, 0), 2, 0)), 1),
+       seen_ending(
+           from_short_region(sliding(ends_read(judged(outside_view(seen(950, 0, 0), 0.35f)), 2, 0, 0, 0), 2, 0)), 1),
        true, CandidateOutcome::accepted, false, false, 0.6175f},
       {"a fifth out of the view, the rest confirmed, from a short region",
        from_short_region(judged(outside_view(seen(900, 0, 0), 0.2f))), true, CandidateOutcome::accepted,

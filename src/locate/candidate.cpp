@@ -354,8 +354,8 @@ Decision decide(const Evidence& given, const LocateConfig& cfg) {
       confirmed >= well_seen_share || (unhidden > 0 && confirmed / unhidden >= well_seen_share &&
                                        !(e.ends_must_pin && e.best.ends_seen_ending == 0));
   const bool short_but_placed =
-      e.ends_judged && ((e.best.ends_pinned > 0 && !e.model_slides) ||
-                        (e.best.ends_seen_ending >= 2 && e.best.ends_continued == 0));
+      e.ends_judged &&
+      (e.model_slides ? e.best.ends_seen_ending >= 2 && e.best.ends_continued == 0 : e.best.ends_pinned > 0);
   const bool checked_in_view =
       (e.best.outside_view <= float(cfg.verify_max_outside_view) &&
        confirmed_of_whole >= float(cfg.verify_min_agreement)) ||
