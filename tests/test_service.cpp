@@ -251,6 +251,48 @@ TEST(SimSource, TheTruthFileGivesEachPipesShareInViewAndTheCameraHeight) {
   }
 }
 
+// The truth file also gives each pipe's share covered by the others (what the scorer bounds a
+// right pick by): in a pile some pipes lie under others; the last pipe left is covered by none.
+TEST(SimSource, TheTruthFileGivesEachPipesShareCoveredByTheOthers) {
+  test::TempDir dir;
+  SimSourceConfig cfg;
+  cfg.pipes = 30;
+  cfg.seed = 5;
+  cfg.refill = false;
+  cfg.truth_file = dir.file("truth.jsonl");
+  SimSource src(sbend(), cfg);
+  Frame f;
+  f.depth_mm.resize(src.intrinsics().width, src.intrinsics().height);
+  const auto grab_truth = [&] {
+    EXPECT_EQ(src.grab(Clock::now(), Clock::now() + std::chrono::seconds(1), &f), GrabStatus::ok);
+    std::istringstream in(test::read_text(cfg.truth_file));
+    std::string line, last;
+    while (std::getline(in, line)) last = line;
+    return nlohmann::json::parse(last)["covered"];
+  };
+  const nlohmann::json full = grab_truth();
+  ASSERT_EQ(full.size(), 30u);
+  int free = 0, under = 0;
+  std::size_t most = 0;
+  for (std::size_t i = 0; i < full.size(); ++i) {
+    const double share = full[i].get<double>();
+    EXPECT_GE(share, 0.0);
+    EXPECT_LE(share, 1.0);
+    free += share == 0.0, under += share > 0.15;
+    if (share > full[most].get<double>()) most = i;
+  }
+  EXPECT_GT(free, 0) << "the pile's top pipes";
+  EXPECT_GT(under, 0) << "30 S-bends in a pile: some lie under others";
+  // Every pipe but the most covered one taken: nothing covers it any more.
+  const std::vector<Pose> pipes = src.pipes_in_camera();
+  for (std::size_t i = 0; i < pipes.size(); ++i)
+    if (i != most) src.picked(pipes[i]);
+  ASSERT_EQ(src.pipes_in_camera().size(), 1u);
+  const nlohmann::json last = grab_truth();
+  ASSERT_EQ(last.size(), 1u);
+  EXPECT_EQ(last[0].get<double>(), 0.0);
+}
+
 // refill_after_frames_without_pick: a bin nothing is picked from is replaced after N frames;
 // a pick in between starts the count again.
 TEST(SimSource, ABinWithoutPicksIsReplacedAfterNFrames) {

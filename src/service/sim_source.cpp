@@ -48,7 +48,8 @@ SimSource::~SimSource() {
 
 void SimSource::write_truth(std::uint64_t frame) {
   // {"frame": N, "bin": B, "camera_height_mm": H, "model_to_cam": [[R row-major (9), t mm (3)], ...],
-  //  "in_view": [share of each pipe's surface in the sensor's view, ...]}; fprintf allocates nothing.
+  //  "in_view": [share of each pipe's surface in the sensor's view, ...],
+  //  "covered": [share of each pipe's silhouette covered by the others, ...]}; fprintf allocates nothing.
   std::fprintf(truth_, "{\"frame\":%llu,\"bin\":%d,\"camera_height_mm\":%.1f,\"model_to_cam\":[",
                (unsigned long long)frame, bins_, camera_height_mm(world_to_cam_));
   for (std::size_t i = 0; i < pile_.size(); ++i) {
@@ -73,6 +74,8 @@ void SimSource::write_truth(std::uint64_t frame) {
     std::fprintf(truth_, "%s%.3f", i ? "," : "",
                  surface_.empty() ? 0.0 : double(inside) / double(surface_.size()));
   }
+  std::fprintf(truth_, "],\"covered\":[");
+  for (std::size_t i = 0; i < covered_.size(); ++i) std::fprintf(truth_, "%s%.3f", i ? "," : "", covered_[i]);
   std::fprintf(truth_, "]}\n");
   std::fflush(truth_);
 }
@@ -85,9 +88,19 @@ void SimSource::fill_bin() {
 }
 
 void SimSource::render() {
-  DepthTarget camera, projector;
-  render_views(model_, pile_, world_to_cam_, params_, &camera, &projector);
-  view_ = prepare_sensor_view(camera, projector, params_.intrinsics, params_.sensor);
+  SimulatedScene scene;
+  DepthTarget projector;
+  render_views(model_, pile_, world_to_cam_, params_, &scene.clean, &projector);
+  view_ = prepare_sensor_view(scene.clean, projector, params_.intrinsics, params_.sensor);
+  if (!truth_) return;
+  // Each pipe's share under the others, as the scorer's bound on a right pick counts it (a pipe
+  // covered over more than 15 % is no right pick), for the truth file.
+  scene.camera.intrinsics = params_.intrinsics;
+  scene.camera.world_to_cam = world_to_cam_;
+  scene.model_to_world = pile_;
+  scene.depth_mm = scene.clean.z_mm;
+  covered_.clear();
+  for (const GtInfo& g : visibility_info(model_, scene)) covered_.push_back(g.occ_by_pipes);
 }
 
 GrabStatus SimSource::grab(Clock::time_point, Clock::time_point, Frame* out) {

@@ -42,6 +42,9 @@ class SimSource : public FrameSource {
   std::vector<Pose> pile_;                 // model -> world
   Pose world_to_cam_ = Pose::Identity();
   SensorView view_;
+  // With a truth file: the share of each pipe covered by the others, as the scorer counts it
+  // (GtInfo::occ_by_pipes), for the pile as last rendered.
+  std::vector<double> covered_;
   std::uint64_t sequence_ = 0;
   int bins_ = 0;
   int frames_without_pick_ = 0;
