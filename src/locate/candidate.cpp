@@ -584,6 +584,19 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
                        free_space_band_px(cfg, lm, ctx.camera, model_to_cam), &buf->scratch_depth,
                        &buf->scratch_mesh, hole_side_px(lm, ctx.camera, model_to_cam), &ctx.view);
   };
+  // Where the renders of two poses differ, the pixels that show each (tell_apart); renders into
+  // the scratch and rival buffers.
+  const auto telling_pixels = [&](const PipeEstimate& a, const PipeEstimate& b) {
+    const auto t0 = Clock::now();
+    const PixelBox box_a = render_depth_in_box(lm.verify_mesh, a.model_to_cam, ctx.camera,
+                                               &buf->scratch_depth, &buf->scratch_mesh, lm.verify_winding);
+    const PixelBox box_b = render_depth_in_box(lm.verify_mesh, b.model_to_cam, ctx.camera, &buf->rival_depth,
+                                               &buf->scratch_mesh, lm.verify_winding);
+    const TellingPixels told =
+        tell_apart(buf->scratch_depth, box_a, buf->rival_depth, box_b, ctx.depth, telling_tolerance_mm(cfg));
+    buf->times.verify_ms += ms_since(t0);
+    return told;
+  };
   // Two readings of one pipe: more than ambiguity_pose_mm apart, and sharing at least
   // kRivalMinSharedTube of the tube. A hypothesis that shares less lies on another pipe (a ridge
   // fit reaching a neighbour): the image confirming both says nothing against either.
@@ -735,7 +748,11 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
   }
   // Beyond the paper: the best turned about the pipe's own length by quarter turns, each refined:
   // where the image confirms another turn about as well and it moves the pick beyond
-  // roll_ambiguity_mm, the pipe's turn is not known to the pick's tolerance.
+  // roll_ambiguity_mm, the pipe's turn is not known to the pick's tolerance; unless, where the two
+  // differ, the pixels show the best and hardly the turn, as they tell a rival (tell_rolls_apart).
+  // A coil of 1.25 turns turned half about its length lies nearly where it was: seed 21's 18-coil
+  // of the zoo (8.3 mm, 0.48 m under the stereo sensor) had its right poses ambiguous so, its bin
+  // stopped with 14 coils free (docs/experiments.md).
   if (cfg.judge_rolls && have_best && !lm.rolls.empty()) {
     constexpr std::size_t kTurns = 4;
     PipeEstimate turned[kTurns];
@@ -748,9 +765,13 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
       turned[n_turned++] = judge(found * lm.rolls[k], found_cost_mm, buf->region_pts.data(), refine_count, true);
     }
     const float roll_mm = float(cfg.roll_ambiguity_mm);
-    for (std::size_t k = 0; k < n_turned && !out.roll_unsure; ++k)
-      out.roll_unsure = as_good(turned[k].check, best.check, cfg) &&
-                        pick_distance_mm(lm, best.model_to_bin, turned[k].model_to_bin, roll_mm) > roll_mm;
+    for (std::size_t k = 0; k < n_turned && !out.roll_unsure; ++k) {
+      if (!as_good(turned[k].check, best.check, cfg) ||
+          !(pick_distance_mm(lm, best.model_to_bin, turned[k].model_to_bin, roll_mm) > roll_mm))
+        continue;
+      const TellingPixels told = cfg.tell_rolls_apart ? telling_pixels(best, turned[k]) : TellingPixels{};
+      out.roll_unsure = !pixels_show(told.for_a, told.for_b);
+    }
   }
   if (have_best) {
     const Pose found = best.model_to_bin;  // the best after its twins: slid poses of this one
@@ -872,16 +893,8 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
   }
   // Beyond the paper: where the best and a rival about as good differ (a near twin's longer leg,
   // a slid pose's ends), which one the image shows (decide() weighs it with the ends).
-  if (cfg.tell_rivals_apart && have_best && have_second && as_good(second.check, best.check, cfg)) {
-    const auto t0 = Clock::now();
-    const PixelBox box_best = render_depth_in_box(lm.verify_mesh, best.model_to_cam, ctx.camera,
-                                                  &buf->scratch_depth, &buf->scratch_mesh, lm.verify_winding);
-    const PixelBox box_second = render_depth_in_box(lm.verify_mesh, second.model_to_cam, ctx.camera,
-                                                    &buf->rival_depth, &buf->scratch_mesh, lm.verify_winding);
-    out.told = tell_apart(buf->scratch_depth, box_best, buf->rival_depth, box_second, ctx.depth,
-                          telling_tolerance_mm(cfg));
-    buf->times.verify_ms += ms_since(t0);
-  }
+  if (cfg.tell_rivals_apart && have_best && have_second && as_good(second.check, best.check, cfg))
+    out.told = telling_pixels(best, second);
   out.complete = true;
   return out;
 }

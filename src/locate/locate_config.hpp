@@ -167,7 +167,9 @@ struct LocateConfig {
                                            // (not for a pipe that slides along itself: its ends place it)
   bool judge_rolls = true;        // the found pose turned about the pipe's own length by quarter turns
   double roll_ambiguity_mm = 5;   // ... a turn the image confirms as well that moves the pick further
-                                  // than this (the pick-correct tolerance): ambiguous
+                                  // than this (the pick-correct tolerance): ambiguous ...
+  bool tell_rolls_apart = true;   // ... unless, where the two differ, the image speaks for the found
+                                  // pose and hardly for the turn (as tell_rivals_apart)
   bool rivals_across_regions = true;  // two regions' estimates that read one pipe two ways, the
                                       // image confirming both about as well: both ambiguous (both
                                       // in view: the one whose ends show worse dropped)
