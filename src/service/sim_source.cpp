@@ -98,7 +98,7 @@ void SimSource::render() {
   scene.camera.intrinsics = params_.intrinsics;
   scene.camera.world_to_cam = world_to_cam_;
   scene.model_to_world = pile_;
-  scene.depth_mm = scene.clean.z_mm;
+  scene.depth_mm = scene.clean.z_mm;  // read only for the valid pixels' count, not used here
   covered_.clear();
   for (const GtInfo& g : visibility_info(model_, scene)) covered_.push_back(g.occ_by_pipes);
 }
