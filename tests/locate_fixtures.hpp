@@ -133,8 +133,8 @@ inline SimulatedScene thin_elbow_pile(const PipeModel& model, unsigned seed) {
 }
 
 // `pipes` of them under the stereo sensor looking straight down from min_mm-max_mm above the floor.
-inline SimulatedScene thin_elbows_below_stereo(const PipeModel& model, int pipes, double min_mm,
-                                               double max_mm, std::mt19937& rng) {
+inline SimulatedScene pipes_below_stereo(const PipeModel& model, int pipes, double min_mm, double max_mm,
+                                         std::mt19937& rng) {
   SceneParams p;
   p.pile.pipes = pipes;
   p.camera_height_min_mm = min_mm, p.camera_height_max_mm = max_mm;

@@ -399,11 +399,7 @@ TEST(Locator, ACoilsTurnAboutItsLengthIsToldApartByThePixels) {
   int picks[2] = {0, 0}, right[2] = {0, 0};
   for (unsigned seed = 1; seed <= 12; ++seed) {
     std::mt19937 rng(seed);
-    SceneParams p;
-    p.pile.pipes = 1;
-    p.camera_height_min_mm = 429, p.camera_height_max_mm = 529;
-    p.sensor = sensor_model("stereo");
-    const SimulatedScene s = simulate_scene(coil, p, rng);
+    const SimulatedScene s = pipes_below_stereo(coil, 1, 429, 529, rng);
     for (int on = 0; on < 2; ++on) {
       LocateConfig cfg;
       cfg.tell_rolls_apart = on == 1;
@@ -695,7 +691,7 @@ TEST(Locator, ALoneThinElbowTheRidgeFitsMissIsPickedFromItsSecondSearch) {
   constexpr int kImages = 30;
   for (int image = 0; image < kImages; ++image) {
     // One elbow on the floor, the sensor 0.65-0.72 m up (as 04-elbow of the zoo).
-    const SimulatedScene s = thin_elbows_below_stereo(model, 1, 650, 720, rng);
+    const SimulatedScene s = pipes_below_stereo(model, 1, 650, 720, rng);
     Locator a(model, reported, s.camera.intrinsics), b(model, by_default, s.camera.intrinsics);
     const LocateOutput& first = a.locate_to_pick(s.depth_mm, s.camera);
     const int pa = first.pick();
@@ -735,7 +731,7 @@ TEST(Locator, AThinElbowTheSensorDoesNotResolveIsNotHandedOut) {
   std::mt19937 rng(7);
   constexpr int kImages = 16;
   for (int image = 0; image < kImages; ++image) {
-    const SimulatedScene s = thin_elbows_below_stereo(model, 2, 1000, 1070, rng);
+    const SimulatedScene s = pipes_below_stereo(model, 2, 1000, 1070, rng);
     Locator a(model, by_default, s.camera.intrinsics), b(model, unchecked, s.camera.intrinsics);
     const LocateOutput& out = a.locate_to_pick(s.depth_mm, s.camera);
     picks += out.pick() >= 0;

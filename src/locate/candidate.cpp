@@ -769,8 +769,11 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
       if (!as_good(turned[k].check, best.check, cfg) ||
           !(pick_distance_mm(lm, best.model_to_bin, turned[k].model_to_bin, roll_mm) > roll_mm))
         continue;
-      const TellingPixels told = cfg.tell_rolls_apart ? telling_pixels(best, turned[k]) : TellingPixels{};
-      out.roll_unsure = !pixels_show(told.for_a, told.for_b);
+      if (cfg.tell_rolls_apart) {
+        const TellingPixels told = telling_pixels(best, turned[k]);
+        if (pixels_show(told.for_a, told.for_b)) continue;  // the image shows the best, not the turn
+      }
+      out.roll_unsure = true;
     }
   }
   if (have_best) {
