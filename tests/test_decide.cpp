@@ -68,6 +68,18 @@ Evidence seen_ending(Evidence e, int n) {
   return e;
 }
 
+// ... a straight tube (its centreline on a line: LocatorModel::straight).
+Evidence straight(Evidence e) {
+  e.model_straight = true;
+  return e;
+}
+
+// Of the best's pinned ends, `n` pinned by the probe read further along it alone (read_further).
+Evidence pinned_further(Evidence e, int n) {
+  e.best.ends_pinned_further = n;
+  return e;
+}
+
 // Of the best's ends, `n` whose tip lies outside the sensor's view: the image cannot show them.
 Evidence ends_out_of_view(Evidence e, int n) {
   e.best.ends_out_of_view = n;
@@ -304,6 +316,42 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
        seen_ending(
            from_short_region(sliding(ends_read(judged(outside_view(seen(950, 0, 0), 0.35f)), 2, 0, 0, 0), 2, 0)), 1),
        true, CandidateOutcome::accepted, false, false, 0.6175f},
+      // ... and a straight tube by its ends in view, at least one, each seen ending outright: one
+      // running out of the view at its other end.
+      {"the same, a straight tube, its one end in view seen ending outright",
+       straight(ends_out_of_view(
+           seen_ending(
+               from_short_region(sliding(ends_read(judged(outside_view(seen(950, 0, 0), 0.35f)), 1, 0, 0, 0), 1, 0)),
+               1),
+           1)),
+       true, CandidateOutcome::accepted, false, true, 0.6175f},
+      {"the same, an arc",
+       ends_out_of_view(
+           seen_ending(
+               from_short_region(sliding(ends_read(judged(outside_view(seen(950, 0, 0), 0.35f)), 1, 0, 0, 0), 1, 0)),
+               1),
+           1),
+       true, CandidateOutcome::accepted, false, false, 0.6175f},
+      {"the same, a straight tube, both ends in view, one seen ending outright",
+       straight(seen_ending(
+           from_short_region(sliding(ends_read(judged(outside_view(seen(950, 0, 0), 0.35f)), 2, 0, 0, 0), 2, 0)), 1)),
+       true, CandidateOutcome::accepted, false, false, 0.6175f},
+      // A straight tube reaching beyond verify_max_outside_view is placed only by an end pinned by
+      // the probes beside its tip: past the sensor's shadow, the probe read further along it may
+      // lie beyond its end.
+      {"a third out of the view, sliding, its end in view pinned",
+       ends_out_of_view(sliding(ends_read(judged(outside_view(seen(950, 0, 0), 0.35f)), 1, 0, 0, 0), 1, 0), 1),
+       true, CandidateOutcome::accepted, false, true, 0.6175f},
+      {"the same, a straight tube pinned by the probe read further alone",
+       straight(pinned_further(
+           ends_out_of_view(sliding(ends_read(judged(outside_view(seen(950, 0, 0), 0.35f)), 1, 0, 0, 0), 1, 0), 1),
+           1)),
+       true, CandidateOutcome::accepted, false, false, 0.6175f},
+      {"the same, an arc pinned by the probe read further alone",
+       pinned_further(
+           ends_out_of_view(sliding(ends_read(judged(outside_view(seen(950, 0, 0), 0.35f)), 1, 0, 0, 0), 1, 0), 1),
+           1),
+       true, CandidateOutcome::accepted, false, true, 0.6175f},
       {"a fifth out of the view, the rest confirmed, from a short region",
        from_short_region(judged(outside_view(seen(900, 0, 0), 0.2f))), true, CandidateOutcome::accepted,
        false, true, 0.72f},
@@ -451,6 +499,22 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
       {"sliding, an end pinned past a hidden tip, a slid rival as good",
        sliding(ends_read(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), 1, 0, 0, 0), 1, 0), true,
        CandidateOutcome::accepted, true, false, 0.45f},
+      // ... nor do the pixels telling the two apart, but for a straight tube whose ends place it no
+      // worse than the rival's: an end seen ending outright, none going on.
+      {"sliding, both an end seen ending, the pixels show the best",
+       told(seen_ending(sliding(ends_read(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), 1, 0, 1, 0), 1, 0),
+                        1),
+            kMinTellingPx, 0),
+       true, CandidateOutcome::accepted, true, false, 0.45f},
+      {"the same, a straight tube",
+       straight(told(
+           seen_ending(sliding(ends_read(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), 1, 0, 1, 0), 1, 0), 1),
+           kMinTellingPx, 0)),
+       true, CandidateOutcome::accepted, false, true, 0.9f},
+      {"the same, a straight tube, its end pinned past a hidden tip",
+       straight(told(sliding(ends_read(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), 1, 0, 1, 0), 1, 0),
+                     kMinTellingPx, 0)),
+       true, CandidateOutcome::accepted, true, false, 0.45f},
       {"rival seen through: worse", judged_with_rival(seen(900, 0, 0), seen(900, 30, 0)), true,
        CandidateOutcome::accepted, false, true, 0.9f},
   };

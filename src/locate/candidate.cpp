@@ -293,9 +293,16 @@ Decision decide(const Evidence& given, const LocateConfig& cfg) {
   // ... unless the image shows the best's ends where they are and not the rival's (a near twin
   // whose telling end is in view: beyond one of its ends the tube goes on, or it is not pinned).
   // ... or where the two differ, the image speaks for the best and hardly for the rival (not for
-  // a pipe that slides along itself: its ends place it, below).
-  const bool told_apart =
-      cfg.tell_rivals_apart && !e.ends_must_pin && pixels_show(e.told.for_a, e.told.for_b);
+  // a pipe that slides along itself: its ends place it, below; but a straight tube whose ends
+  // place it no worse than its rival's place it, an end seen ending outright and none going on:
+  // one running out of the view, slid 1 mm from its pipe, 301 pixels for it and none for a rival
+  // slid along it whose end met another tube).
+  const int best_outright = ends_shown_outright(e.best);
+  const bool straight_placed_as_rival = e.model_straight && best_outright >= 1 &&
+                                        e.best.ends_continued == 0 &&
+                                        best_outright >= ends_shown_outright(e.second);
+  const bool told_apart = cfg.tell_rivals_apart && pixels_show(e.told.for_a, e.told.for_b) &&
+                          (!e.ends_must_pin || straight_placed_as_rival);
   // A rival's end that goes on counts against it only where the pixels telling the two apart do
   // not speak for it half as much as for the best: another pipe touching the right pose's end
   // reads as its tube going on.
@@ -305,7 +312,7 @@ Decision decide(const Evidence& given, const LocateConfig& cfg) {
   // A pipe that slides along itself is told from its slid rival only by an end seen ending
   // outright: a pin read past a hidden tip or on one probe is where a slid coil's end meets a
   // pipe in front or the image's edge (17-coil, 12 bins, room for 32 candidates: 11 wrong picks).
-  const int best_ends_shown = e.ends_must_pin ? ends_shown_outright(e.best) : ends_shown(e.best);
+  const int best_ends_shown = e.ends_must_pin ? best_outright : ends_shown(e.best);
   out.ambiguous = e.have_second && as_good(e.second, e.best, cfg) &&
                   !(ends_tell && best_ends_shown > rival_ends_shown) && !told_apart;
   // Beyond the paper: a pipe that slides along itself is placed along its length only by an end
@@ -347,21 +354,32 @@ Decision decide(const Evidence& given, const LocateConfig& cfg) {
   // of the view; one that does not is placed by the bends in view and the end shown (23-planar of
   // the zoo: 3 more pipes taken in 3 bins). A pipe that slides is placed so only by both its ends
   // seen ending outright, none going on: a long arc whose middle runs out of the view (14-arc of
-  // seed 20: 4 more arcs taken while clearing its bin).
+  // seed 20: 4 more arcs taken while clearing its bin); a straight tube by its ends in view, at
+  // least one, each seen ending outright, none going on: one running out of the view at its other
+  // end (01-straight of seed 20, 900 mm tubes: 5 -> 23 taken while clearing 3 bins). Straight
+  // tubes only: so placed, arcs' bins clear further and reach arcs the fine slides leave 7-21 mm
+  // round themselves (docs/experiments.md).
+  // A straight tube is pinned there only by the probes beside its tip: one read further along it
+  // alone leaves the tube room to go on, unread, between them (a tube 43 mm thick, its end in view
+  // in the sensor's shadow at a crossing, picked 70 mm short of it).
+  const int pinned_beside_tip = e.best.ends_pinned - (e.model_straight ? e.best.ends_pinned_further : 0);
   const float well_seen_share = float(cfg.verify_well_seen_agreement);
   const float unhidden = 1.0f - e.best.occluded();
   const bool well_seen =
       confirmed >= well_seen_share || (unhidden > 0 && confirmed / unhidden >= well_seen_share &&
                                        !(e.ends_must_pin && e.best.ends_seen_ending == 0));
+  const int ends_not_out = 2 - e.best.ends_out_of_view;  // of the two, those the image could show
   const bool short_but_placed =
       e.ends_judged &&
-      (e.model_slides ? e.best.ends_seen_ending >= 2 && e.best.ends_continued == 0 : e.best.ends_pinned > 0);
+      (e.model_slides ? e.best.ends_seen_ending >= (e.model_straight ? std::max(1, ends_not_out) : 2) &&
+                            e.best.ends_continued == 0
+                      : e.best.ends_pinned > 0);
   const bool checked_in_view =
       (e.best.outside_view <= float(cfg.verify_max_outside_view) &&
        confirmed_of_whole >= float(cfg.verify_min_agreement)) ||
       ((!e.short_region || short_but_placed) &&
        e.best.outside_view <= float(cfg.verify_max_outside_view_well_seen) && well_seen &&
-       (!e.ends_judged || e.best.ends_pinned > 0 || e.best.ends_out_of_view >= 2));
+       (!e.ends_judged || pinned_beside_tip > 0 || e.best.ends_out_of_view >= 2));
   // Beyond the paper: where the image shows the tube going on beyond both ends of the pose, the
   // pipe there is longer than the pose: it lies elsewhere along it (slid round a bend, across
   // two pipes).
@@ -908,6 +926,7 @@ bool work_candidate(const CandidateContext& ctx, const CandidateInput& in, const
   evidence.tube_d_mm = ctx.lm.tube_d_mm;
   evidence.extent_l_mm = ctx.lm.extent_l_mm;
   evidence.model_slides = !ctx.lm.slides.empty();
+  evidence.model_straight = evidence.model_slides && ctx.lm.straight;
   evidence.ends_must_pin = ctx.cfg.pin_slides_by_ends && evidence.model_slides;
   evidence.short_region = in.region->short_region;
   evidence.searched_again = in.searched_again;

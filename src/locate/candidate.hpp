@@ -138,6 +138,7 @@ struct Evidence {
   float tube_d_mm = 0;                            // D of the model
   float extent_l_mm = 0;                          // L of the model
   bool model_slides = false;                      // the model slides along itself (LocatorModel::slides)
+  bool model_straight = false;                    // ... as a straight tube (LocatorModel::straight)
   bool ends_must_pin = false;                     // ... and its ends place it (pin_slides_by_ends)
   bool ends_judged = false;                       // the poses' ends were read (pin_slides_by_ends)
   bool has_ends = true;                           // ... the model has a centreline to read them by

@@ -164,7 +164,7 @@ Verification verify_pose(const Mesh& mesh, Winding winding, const Pose& model_to
 void judge_ends(const std::vector<Eigen::Vector3f>& centreline, float d, const Pose& model_to_cam,
                 const Image<float>& depth, const Intrinsics& k, float tol, Verification* v,
                 const EndReading& how, const PixelBox* view) {
-  v->ends_pinned = v->ends_continued = v->ends_seen_ending = v->ends_out_of_view = 0;
+  v->ends_pinned = v->ends_continued = v->ends_seen_ending = v->ends_pinned_further = v->ends_out_of_view = 0;
   const PixelBox seen = view_or_image(view, depth.width, depth.height);
   const int n = int(centreline.size());
   if (n < 2) return;
@@ -243,6 +243,7 @@ void judge_ends(const std::vector<Eigen::Vector3f>& centreline, float d, const P
     const bool pinned = free == probes && !(how.tip_must_show && tip_hidden);
     v->ends_pinned += pinned;
     v->ends_seen_ending += pinned && !tip_hidden && probes == int(std::size(kEndProbesOfD)) && !further_only;
+    v->ends_pinned_further += pinned && further_only;
     v->ends_continued += going_on == probes;
   }
 }
