@@ -368,11 +368,10 @@ Decision decide(const Evidence& given, const LocateConfig& cfg) {
   const bool well_seen =
       confirmed >= well_seen_share || (unhidden > 0 && confirmed / unhidden >= well_seen_share &&
                                        !(e.ends_must_pin && e.best.ends_seen_ending == 0));
-  const int ends_not_out = 2 - e.best.ends_out_of_view;  // of the two, those the image could show
+  const int ends_seen_or_out = e.best.ends_seen_ending + (e.model_straight ? e.best.ends_out_of_view : 0);
   const bool short_but_placed =
       e.ends_judged &&
-      (e.model_slides ? e.best.ends_seen_ending >= (e.model_straight ? std::max(1, ends_not_out) : 2) &&
-                            e.best.ends_continued == 0
+      (e.model_slides ? e.best.ends_seen_ending >= 1 && ends_seen_or_out >= 2 && e.best.ends_continued == 0
                       : e.best.ends_pinned > 0);
   const bool checked_in_view =
       (e.best.outside_view <= float(cfg.verify_max_outside_view) &&
