@@ -639,9 +639,10 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
                                          ctx.lowest_surface_z_mm - kBelowFloorOfD * lm.tube_d_mm);
   };
   // Refines a hypothesis on observed points (the region's; a twin's, those the best explains) and
-  // has the image judge it.
+  // has the image judge it. Where start_may_stay, the start itself is judged too and kept where the
+  // image judges it better than its refinement.
   const auto refine_and_check = [&](const Pose& start, float ridge_cost_mm, const Eigen::Vector3f* points,
-                                    int n_points) {
+                                    int n_points, bool start_may_stay = false) {
     auto t0 = Clock::now();
     RefineResult refined = refine_on_surface(lm, start, points, n_points, cfg, camera_bin);
     int refined_on = n_points;
@@ -677,6 +678,15 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
         }
       }
     }
+    if (start_may_stay) {
+      const Pose start_to_cam = ctx.bin_to_cam * start;
+      const Verification v = verify_at(start_to_cam);
+      if (hypothesis_quality(v) > hypothesis_quality(e.check)) {
+        e.model_to_bin = start;
+        e.model_to_cam = start_to_cam;
+        e.check = v;
+      }
+    }
     // The poses' ends are read for every pipe: a pipe that slides along itself or has a near
     // twin is placed by its ends, and where the tube goes on beyond both ends of a pose the pipe
     // lies elsewhere. A pipe that does not slide is shown ending only where its tip is seen: a
@@ -700,12 +710,15 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
   const bool ends_place =
       cfg.slides_placed_first && cfg.judge_slides && cfg.pin_slides_by_ends && !lm.slides.empty();
   // Keeps the best two hypotheses that are more than ambiguity_pose_mm apart. Returns the
-  // hypothesis as judged. A turn of the found pose about its length (is_turn) replaces it only as
-  // turn_may_replace() says.
+  // hypothesis as judged. A turn of the found pose about its length replaces it only as
+  // turn_may_replace() says; a twin that may stay is kept unrefined where the image judges its
+  // start better (below).
+  enum class Start { hypothesis, turn, twin_may_stay };
   const auto judge = [&](const Pose& start, float ridge_cost_mm, const Eigen::Vector3f* points, int n_points,
-                         bool is_turn = false) {
-    const PipeEstimate e = refine_and_check(start, ridge_cost_mm, points, n_points);
-    if (is_turn && have_best && !turn_may_replace(e.check, best.check)) return e;
+                         Start kind = Start::hypothesis) {
+    const PipeEstimate e =
+        refine_and_check(start, ridge_cost_mm, points, n_points, kind == Start::twin_may_stay);
+    if (kind == Start::turn && have_best && !turn_may_replace(e.check, best.check)) return e;
     if (!have_best || better_reading(e.check, best.check, ends_place, cfg)) {
       if (have_best && rivals(best, e))
         second = best, have_second = true;
@@ -745,8 +758,13 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
   // best lies on, where the region's top strip may hold too little of it: a twin a leg's
   // difference away slides off a strip, not off the whole pipe. A twin that wins has its own twin
   // judged in turn (the first best may itself have been a twin badly placed), at most
-  // kTwinRounds times.
+  // kTwinRounds times. A twin of a pipe that slides along itself stays where the half-turn puts it
+  // where the image judges that better than its refinement: refined on the points the best
+  // explains, a 10.2 mm elbow's twin agreeing 0.89 was moved off its pipe to 0.52 (the zoo's
+  // 04-elbow; docs/experiments.md). Not for other pipes: a near twin kept unrefined is handed out
+  // in its pipe's place (23-planar of seed 21: 2 wrong picks).
   constexpr int kTwinRounds = 4;
+  const Start twin_start = lm.slides.empty() ? Start::hypothesis : Start::twin_may_stay;
   for (int round = 0; have_best && round < kTwinRounds && !ctx.model.near_symmetries.empty(); ++round) {
     const Pose found = best.model_to_bin;  // judging a twin may replace the best: twins of this one
     const float found_cost_mm = best.ridge_cost_mm;
@@ -759,7 +777,7 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
         continue;
       if (deadline.passed()) return out;
       judge(twin, found_cost_mm, found_count > 0 ? buf->found_pts.data() : buf->region_pts.data(),
-            found_count > 0 ? found_count : refine_count);
+            found_count > 0 ? found_count : refine_count, twin_start);
     }
     if (pick_distance_mm(lm, found, best.model_to_bin, ambiguity_mm) <= ambiguity_mm) break;  // it held
   }
@@ -779,7 +797,8 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
     const float found_cost_mm = best.ridge_cost_mm;
     for (std::size_t k = 0; k < lm.rolls.size() && n_turned < kTurns; ++k) {
       if (deadline.passed()) return out;
-      turned[n_turned++] = judge(found * lm.rolls[k], found_cost_mm, buf->region_pts.data(), refine_count, true);
+      turned[n_turned++] =
+          judge(found * lm.rolls[k], found_cost_mm, buf->region_pts.data(), refine_count, Start::turn);
     }
     const float roll_mm = float(cfg.roll_ambiguity_mm);
     for (std::size_t k = 0; k < n_turned && !out.roll_unsure; ++k) {
