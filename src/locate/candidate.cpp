@@ -653,6 +653,14 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
     e.model_to_cam = ctx.bin_to_cam * refined.pose;
     e.check = verify_at(e.model_to_cam);
     reached->add_hypothesis(e.model_to_bin, e.check.agreement());
+    // Another reading of the same hypothesis takes e's place where the image judges it better.
+    const auto take_if_better = [&](const Pose& to_bin, const Pose& to_cam, const Verification& v) {
+      if (hypothesis_quality(v) <= hypothesis_quality(e.check)) return false;
+      e.model_to_bin = to_bin;
+      e.model_to_cam = to_cam;
+      e.check = v;
+      return true;
+    };
     // Beyond the paper: refined again on all the image shows of the pipe where this pose put it
     // (the region holds only its top strip, along which a leg can slide); kept if judged better.
     if (cfg.refine_on_explained &&
@@ -669,23 +677,12 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
         const Pose again_to_cam = ctx.bin_to_cam * again.pose;
         const Verification v = verify_at(again_to_cam);
         reached->add_hypothesis(again.pose, v.agreement());
-        if (hypothesis_quality(v) > hypothesis_quality(e.check)) {
-          refined = again;
-          refined_on = n;
-          e.model_to_bin = again.pose;
-          e.model_to_cam = again_to_cam;
-          e.check = v;
-        }
+        if (take_if_better(again.pose, again_to_cam, v)) refined = again, refined_on = n;
       }
     }
     if (start_may_stay) {
       const Pose start_to_cam = ctx.bin_to_cam * start;
-      const Verification v = verify_at(start_to_cam);
-      if (hypothesis_quality(v) > hypothesis_quality(e.check)) {
-        e.model_to_bin = start;
-        e.model_to_cam = start_to_cam;
-        e.check = v;
-      }
+      take_if_better(start, start_to_cam, verify_at(start_to_cam));
     }
     // The poses' ends are read for every pipe: a pipe that slides along itself or has a near
     // twin is placed by its ends, and where the tube goes on beyond both ends of a pose the pipe
