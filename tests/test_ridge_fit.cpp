@@ -271,8 +271,9 @@ TEST(PoseDistance, OfTwoReadingsInTheViewTheEndsRefuteTheOneTheyShowWorse) {
 // Beyond the paper: the turns judged about a pipe's own length. An elbow has three quarter turns
 // about the principal axis of its centreline, which each keep the centreline's centroid and axis
 // in place and four of which are no turn; a straight tube (the same pick turned) and an arc (placed
-// by its ends along itself) have none.
-TEST(LocatorModel, QuarterTurnsAboutThePipesLengthForPipesThatDoNotSlide) {
+// by its ends along itself) have none. A short bend that slides along itself has them too where a
+// quarter turn lands most of it on itself: its turn is hardly told by where its surface lies.
+TEST(LocatorModel, QuarterTurnsAboutThePipesLengthWhereTheyLandItMostlyOnItself) {
   LocateConfig cfg;
   const LocatorModel elbow = prepare_locator_model(pipe_of("S40,B45r20,S30", 10), 8, cfg);
   ASSERT_EQ(elbow.rolls.size(), 3u);
@@ -287,6 +288,13 @@ TEST(LocatorModel, QuarterTurnsAboutThePipesLengthForPipesThatDoNotSlide) {
   EXPECT_TRUE((elbow.rolls[0] * elbow.rolls[2]).matrix().isApprox(Eigen::Matrix4d::Identity(), 1e-9));
   EXPECT_TRUE(prepare_locator_model(pipe_of("S150", 20, "straight"), 8, cfg).rolls.empty());
   EXPECT_TRUE(prepare_locator_model(pipe_of("B180r100", 12), 8, cfg).rolls.empty());
+  const LocatorModel short_bend = prepare_locator_model(pipe_of("S5.4,B-45r31.3,S11.3", 10.2), 8, cfg);
+  EXPECT_FALSE(short_bend.slides.empty());
+  EXPECT_EQ(short_bend.rolls.size(), 3u);
+  const LocatorModel coil =
+      prepare_locator_model(pipe_of("B120r55.7,B120r55.7t15.6,B120r55.7t15.6", 22.5), 8, cfg);
+  EXPECT_FALSE(coil.slides.empty());
+  EXPECT_TRUE(coil.rolls.empty());
 }
 
 // IV-B: from the paper's ranges (about the axis up to +-70 degrees, 3 cm along it) the ridge

@@ -223,11 +223,16 @@ LocatorModel prepare_locator_model(const PipeModel& model, float margin_mm, cons
       add_slides(follow, &lm.follow_slides);
     }
   }
-  if (lm.centreline_points.size() >= 3 && !lm.straight && lm.slides.empty()) {
+  if (lm.centreline_points.size() >= 3 && !lm.straight) {
     const Eigen::Vector3f c = centroid_of(lm.centreline_points);
     const Eigen::Vector3d axis = principal_axes(lm.centreline_points, c).col(2);
     for (int quarter = 1; quarter < 4; ++quarter)
       lm.rolls.push_back(turn_about(axis, c, 0.5 * M_PI * quarter));
+    const ModelDerivation near;  // of a pipe that slides, only a short bend's (locator_model.hpp)
+    if (!lm.slides.empty() && share_landing_on_itself(model.surface, lm.rolls.front(),
+                                                      near.near_symmetry_tolerance_of_diameter *
+                                                          lm.tube_d_mm) < near.near_symmetry_min_share)
+      lm.rolls.clear();
   }
   return lm;
 }

@@ -181,4 +181,11 @@ std::vector<Slide> find_slides(const SurfaceSamples& surface, const Centreline& 
   return found;
 }
 
+float share_landing_on_itself(const SurfaceSamples& surface, const Pose& m, float tolerance_mm) {
+  if (surface.points.empty()) return 0.0f;
+  KdTree3 tree;
+  tree.build(surface.points.data(), surface.points.size());
+  return landing_share(surface, tree, m, tolerance_mm);
+}
+
 }  // namespace pipeloc

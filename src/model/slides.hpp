@@ -42,4 +42,7 @@ struct Slide {
 std::vector<Slide> find_slides(const SurfaceSamples& surface, const Centreline& centreline, float tube_d_mm,
                                const std::vector<float>& arc_mm, float tolerance_mm, float min_share);
 
+// The share of the surface samples that land within tolerance_mm of the surface after motion m.
+float share_landing_on_itself(const SurfaceSamples& surface, const Pose& m, float tolerance_mm);
+
 }  // namespace pipeloc
