@@ -268,12 +268,13 @@ TEST(PoseDistance, OfTwoReadingsInTheViewTheEndsRefuteTheOneTheyShowWorse) {
   EXPECT_EQ(reading_its_ends_refute(lm, a, twin, cfg), -1);
 }
 
-// Beyond the paper: the turns judged about a pipe's own length. An elbow has three quarter turns
-// about the principal axis of its centreline, which each keep the centreline's centroid and axis
-// in place and four of which are no turn; a straight tube (the same pick turned) and an arc (placed
-// by its ends along itself) have none. A short bend that slides along itself has them too where a
-// quarter turn lands most of it on itself: its turn is hardly told by where its surface lies.
-TEST(LocatorModel, QuarterTurnsAboutThePipesLengthWhereTheyLandItMostlyOnItself) {
+// Beyond the paper: the turns judged about a pipe's own length. An elbow that a quarter turn moves
+// mostly off itself has three quarter turns about the principal axis of its centreline, which each keep the
+// centreline's centroid and axis in place and four of which are no turn; a straight tube (the same pick
+// turned) and an arc (placed by its ends along itself) have none. Where a quarter turn lands most of the pipe
+// on itself (a short bend hardly bent), its turn is hardly told by where its surface lies: seven eighth
+// turns, also for such a bend that slides along itself.
+TEST(LocatorModel, TurnsAboutThePipesLengthInEighthsWhereAQuarterLandsItMostlyOnItself) {
   LocateConfig cfg;
   const LocatorModel elbow = prepare_locator_model(pipe_of("S40,B45r20,S30", 10), 8, cfg);
   ASSERT_EQ(elbow.rolls.size(), 3u);
@@ -290,7 +291,10 @@ TEST(LocatorModel, QuarterTurnsAboutThePipesLengthWhereTheyLandItMostlyOnItself)
   EXPECT_TRUE(prepare_locator_model(pipe_of("B180r100", 12), 8, cfg).rolls.empty());
   const LocatorModel short_bend = prepare_locator_model(pipe_of("S5.4,B-45r31.3,S11.3", 10.2), 8, cfg);
   EXPECT_FALSE(short_bend.slides.empty());
-  EXPECT_EQ(short_bend.rolls.size(), 3u);
+  ASSERT_EQ(short_bend.rolls.size(), 7u);
+  for (int k = 1; k <= 7; ++k)  // 45 ... 315 degrees: an angle of 45, 90, 135, 180, 135, 90, 45
+    EXPECT_NEAR(Eigen::AngleAxisd(short_bend.rolls[std::size_t(k - 1)].linear()).angle(),
+                std::min(k, 8 - k) * M_PI / 4, 1e-6);
   const LocatorModel coil =
       prepare_locator_model(pipe_of("B120r55.7,B120r55.7t15.6,B120r55.7t15.6", 22.5), 8, cfg);
   EXPECT_FALSE(coil.slides.empty());

@@ -778,7 +778,8 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
     }
     if (pick_distance_mm(lm, found, best.model_to_bin, ambiguity_mm) <= ambiguity_mm) break;  // it held
   }
-  // Beyond the paper: the best turned about the pipe's own length by quarter turns, each refined:
+  // Beyond the paper: the best turned about the pipe's own length by quarter turns (eighths where a
+  // quarter turn lands the pipe mostly on itself; LocatorModel::rolls), each refined:
   // where the image confirms another turn about as well and it moves the pick beyond
   // roll_ambiguity_mm, the pipe's turn is not known to the pick's tolerance; unless, where the two
   // differ, the pixels show the best and hardly the turn, as they tell a rival (tell_rolls_apart).
@@ -786,7 +787,7 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
   // of the zoo (8.3 mm, 0.48 m under the stereo sensor) had its right poses ambiguous so, its bin
   // stopped with 14 coils free (docs/experiments.md).
   if (cfg.judge_rolls && have_best && !lm.rolls.empty()) {
-    constexpr std::size_t kTurns = 4;
+    constexpr std::size_t kTurns = 8;  // the best and at most seven eighth turns
     PipeEstimate turned[kTurns];
     std::size_t n_turned = 0;
     turned[n_turned++] = best;

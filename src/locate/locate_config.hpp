@@ -166,6 +166,7 @@ struct LocateConfig {
                                            // quarter as much for the rival
                                            // (not for a pipe that slides along itself: its ends place it)
   bool judge_rolls = true;        // the found pose turned about the pipe's own length by quarter turns
+                                  // (eighths where a quarter turn lands it mostly on itself)
   double roll_ambiguity_mm = 5;   // ... a turn the image confirms as well that moves the pick further
                                   // than this (the pick-correct tolerance): ambiguous ...
   bool tell_rolls_apart = true;   // ... unless, where the two differ, the image speaks for the found

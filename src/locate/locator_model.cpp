@@ -226,13 +226,12 @@ LocatorModel prepare_locator_model(const PipeModel& model, float margin_mm, cons
   if (lm.centreline_points.size() >= 3 && !lm.straight) {
     const Eigen::Vector3f c = centroid_of(lm.centreline_points);
     const Eigen::Vector3d axis = principal_axes(lm.centreline_points, c).col(2);
-    for (int quarter = 1; quarter < 4; ++quarter)
-      lm.rolls.push_back(turn_about(axis, c, 0.5 * M_PI * quarter));
-    const ModelDerivation near;  // of a pipe that slides, only a short bend's (locator_model.hpp)
-    if (!lm.slides.empty() && share_landing_on_itself(model.surface, lm.rolls.front(),
-                                                      near.near_symmetry_tolerance_of_diameter *
-                                                          lm.tube_d_mm) < near.near_symmetry_min_share)
-      lm.rolls.clear();
+    const ModelDerivation near;  // the turns judged and their steps: locator_model.hpp
+    const bool lands_on_itself = share_landing_on_itself(model.surface, turn_about(axis, c, 0.5 * M_PI),
+                                                         near.near_symmetry_tolerance_of_diameter *
+                                                             lm.tube_d_mm) >= near.near_symmetry_min_share;
+    const int steps = lands_on_itself ? 8 : lm.slides.empty() ? 4 : 0;
+    for (int k = 1; k < steps; ++k) lm.rolls.push_back(turn_about(axis, c, 2.0 * M_PI * k / steps));
   }
   return lm;
 }

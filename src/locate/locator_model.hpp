@@ -58,14 +58,16 @@ struct LocatorModel {
   // the tube goes on beyond is followed to where the image shows its end (follow_slides_to_ends).
   std::vector<Pose> follow_slides;
   std::size_t short_slides = 0;
-  // Beyond the paper: quarter turns about the centreline's principal axis through its centroid
-  // (none for a straight tube, whose turn about its axis is the same pick). A short or nearly
-  // straight pipe's top strip tells its turn about its own length least: the refinement keeps the
-  // turn it started from (the 8.4 mm elbow's and the 16.7 mm S's poses 5-12 mm off are turned
-  // 20-140 degrees about it). Of a pipe that slides along itself, only where a quarter turn lands
-  // near_symmetry_min_share of its surface within the near symmetries' tolerance of itself (a short
-  // bend: the zoo's elbows 0.67-0.93); not an arc's or a coil's (0.45 and less), which turned slide
-  // onto poses as good and which their ends place (seed 19's 18-coil: 3 -> 0 of its bin taken).
+  // Beyond the paper: turns about the centreline's principal axis through its centroid (none for a
+  // straight tube, whose turn about its axis is the same pick). A short or nearly straight pipe's
+  // top strip tells its turn about its own length least: the refinement keeps the turn it started
+  // from (the 8.4 mm elbow's and the 16.7 mm S's poses 5-12 mm off are turned 20-140 degrees about
+  // it). Where a quarter turn lands near_symmetry_min_share of the surface within the near
+  // symmetries' tolerance of itself (short bends, short S and Z: the zoo's elbows 0.67-0.93), in
+  // eighths: a thin S's pose turned 42 degrees, 13 mm off, was handed out while its quarter turns
+  // refined back to it (seed 21's 11-S-asym). Elsewhere in quarters; and none for a pipe that
+  // slides along itself (an arc's or a coil's quarter turn lands 0.45 and less), which turned
+  // slides onto poses as good and which its ends place (seed 19's 18-coil: 3 -> 0 of its bin taken).
   std::vector<Pose> rolls;
   // Beyond the paper: the principal direction of a partly hidden curved pipe can be far from that
   // of the whole model, so each start is also turned about the vertical, in steps covering half a

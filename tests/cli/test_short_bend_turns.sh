@@ -3,9 +3,10 @@
 # zoo's seed 20) slides along itself, and its turn about its length is little told by where its
 # surface lies. Under the stereo sensor 0.94-1.04 m up (the tube's radius about 1.8 sigmas of the
 # noise), with its turns not judged, two of six piles of 15 were handed a pose turned about 60
-# degrees about the length from its pipe, 11-12 mm off at its furthest point. Its quarter turns are
-# judged as a bend's that does not slide (judge_rolls): none of those picks is handed out. The
-# zoo's own commands: make-pipe -> simulate -> eval-bop --picks -> score --picks.
+# degrees about the length from its pipe, 11-12 mm off at its furthest point. A quarter turn lands
+# it mostly on itself, so its turns about its length are judged in eighths though it slides
+# (judge_rolls): none of those picks is handed out. The zoo's own commands: make-pipe -> simulate ->
+# eval-bop --picks -> score --picks.
 source "$(dirname "$0")/common.sh" "$@"
 
 "$bin" make-pipe --out "$work/bend.stl" --path S5.4,B-45r31.3,S11.3 --diameter 10.2 > /dev/null 2>&1 ||
