@@ -13,8 +13,8 @@ namespace pipeloc {
 namespace {
 
 std::vector<Slide> slides_of(const PipeModel& m, float arc_mm) {
-  return find_slides(m.surface, centreline_of(m.surface, m.tube_diameter_mm), m.tube_diameter_mm, {arc_mm},
-                     0.25f * m.tube_diameter_mm, 0.6f);
+  return find_slides(SurfaceIndex(m.surface), centreline_of(m.surface, m.tube_diameter_mm),
+                     m.tube_diameter_mm, {arc_mm}, 0.25f * m.tube_diameter_mm, 0.6f);
 }
 
 TEST(Slides, CentrelineHasThePathsLength) {

@@ -787,7 +787,7 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
   // of the zoo (8.3 mm, 0.48 m under the stereo sensor) had its right poses ambiguous so, its bin
   // stopped with 14 coils free (docs/experiments.md).
   if (cfg.judge_rolls && have_best && !lm.rolls.empty()) {
-    constexpr std::size_t kTurns = 8;  // the best and at most seven eighth turns
+    constexpr std::size_t kTurns = 1 + LocatorModel::kMostRolls;  // the best and its turns
     PipeEstimate turned[kTurns];
     std::size_t n_turned = 0;
     turned[n_turned++] = best;

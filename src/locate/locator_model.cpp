@@ -190,11 +190,14 @@ LocatorModel prepare_locator_model(const PipeModel& model, float margin_mm, cons
     lm.canonical_starts.push_back(canonical_start(
         model, Eigen::AngleAxisd(2 * M_PI * k / turns, Eigen::Vector3d::UnitX()).toRotationMatrix() * lying,
         cfg));
+  // The slides and the turns about the length are judged as the near symmetries are: what lands
+  // near_symmetry_min_share of the surface within near_symmetry_tolerance_of_diameter x D of itself.
+  const ModelDerivation near;
+  const float landing_tolerance_mm = near.near_symmetry_tolerance_of_diameter * lm.tube_d_mm;
+  const SurfaceIndex surface(model.surface);
   {
     // Slides just beyond the ambiguity distance are the hardest to tell apart; longer ones are
-    // judged too (a pose 5-45 mm along an arc was handed out as a pick before this check). The
-    // tolerance and share are those of the near symmetries: a quarter of D, 60 % of the surface.
-    const ModelDerivation near;
+    // judged too (a pose 5-45 mm along an arc was handed out as a pick before this check).
     // Far slides too, doubling from 8 steps as far as near_symmetry_min_share of the surface stays
     // on itself: a coil standing on its edge, turned a third of a turn round its helix, shows the
     // camera the same top arc, and was handed out 112 mm from its pipe (17-coil of the zoo).
@@ -203,9 +206,8 @@ LocatorModel prepare_locator_model(const PipeModel& model, float margin_mm, cons
     std::vector<float> far;
     for (float arc = 8.0f * step; arc <= furthest; arc *= 2.0f) far.push_back(arc);
     const auto add_slides = [&](const std::vector<float>& arcs, std::vector<Pose>* to) {
-      for (const Slide& s :
-           find_slides(model.surface, centreline, lm.tube_d_mm, arcs,
-                       near.near_symmetry_tolerance_of_diameter * lm.tube_d_mm, near.near_symmetry_min_share))
+      for (const Slide& s : find_slides(surface, centreline, lm.tube_d_mm, arcs, landing_tolerance_mm,
+                                        near.near_symmetry_min_share))
         to->push_back(s.motion);
     };
     add_slides({1.5f * step, 3.0f * step, 5.0f * step}, &lm.slides);
@@ -226,11 +228,11 @@ LocatorModel prepare_locator_model(const PipeModel& model, float margin_mm, cons
   if (lm.centreline_points.size() >= 3 && !lm.straight) {
     const Eigen::Vector3f c = centroid_of(lm.centreline_points);
     const Eigen::Vector3d axis = principal_axes(lm.centreline_points, c).col(2);
-    const ModelDerivation near;  // the turns judged and their steps: locator_model.hpp
-    const bool lands_on_itself = share_landing_on_itself(model.surface, turn_about(axis, c, 0.5 * M_PI),
-                                                         near.near_symmetry_tolerance_of_diameter *
-                                                             lm.tube_d_mm) >= near.near_symmetry_min_share;
-    const int steps = lands_on_itself ? 8 : lm.slides.empty() ? 4 : 0;
+    // The turns judged and their steps: locator_model.hpp.
+    const bool lands_on_itself =
+        share_landing_on_itself(surface, turn_about(axis, c, 0.5 * M_PI), landing_tolerance_mm) >=
+        near.near_symmetry_min_share;
+    const int steps = lands_on_itself ? int(LocatorModel::kMostRolls) + 1 : lm.slides.empty() ? 4 : 0;
     for (int k = 1; k < steps; ++k) lm.rolls.push_back(turn_about(axis, c, 2.0 * M_PI * k / steps));
   }
   return lm;

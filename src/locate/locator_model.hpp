@@ -69,6 +69,7 @@ struct LocatorModel {
   // slides along itself (an arc's or a coil's quarter turn lands 0.45 and less), which turned
   // slides onto poses as good and which its ends place (seed 19's 18-coil: 3 -> 0 of its bin taken).
   std::vector<Pose> rolls;
+  static constexpr std::size_t kMostRolls = 7;  // eighth turns
   // Beyond the paper: the principal direction of a partly hidden curved pipe can be far from that
   // of the whole model, so each start is also turned about the vertical, in steps covering half a
   // turn (the reversed direction covers the other half).

@@ -53,19 +53,6 @@ int farthest_reached(const std::vector<float>& dist) {
   return best;
 }
 
-// The share of `surface` samples that land within tolerance_mm of a sample after `m`.
-float landing_share(const SurfaceSamples& surface, const KdTree3& tree, const Pose& m, float tolerance_mm) {
-  const std::size_t stride = std::max<std::size_t>(1, surface.points.size() / kLandingSamples);
-  int within = 0, n = 0;
-  for (std::size_t i = 0; i < surface.points.size(); i += stride, ++n) {
-    int idx = 0;
-    float d2 = 0;
-    within +=
-        tree.nearest_within((m * surface.points[i].cast<double>()).cast<float>(), tolerance_mm, &idx, &d2);
-  }
-  return n > 0 ? float(within) / float(n) : 0.0f;
-}
-
 }  // namespace
 
 Centreline centreline_of(const SurfaceSamples& surface, float d) {
@@ -149,13 +136,11 @@ Pose best_reversal(const Centreline& line) {
   return best;
 }
 
-std::vector<Slide> find_slides(const SurfaceSamples& surface, const Centreline& line, float d,
+std::vector<Slide> find_slides(const SurfaceIndex& surface, const Centreline& line, float d,
                                const std::vector<float>& arc_mm, float tolerance_mm, float min_share) {
   std::vector<Slide> found;
   const int n = int(line.points.size());
   if (n < 4) return found;
-  KdTree3 tree;
-  tree.build(surface.points.data(), surface.points.size());
   for (float s : arc_mm) {
     const int k = int(std::lround(s / line.step_mm));
     if (k <= 0 || n - k < 3) continue;
@@ -171,7 +156,7 @@ std::vector<Slide> find_slides(const SurfaceSamples& surface, const Centreline& 
       m.matrix() = Eigen::umeyama(from, to, false);
       if (!m.matrix().allFinite()) continue;
       m.linear() = nearest_rotation(m.linear());
-      const float share = landing_share(surface, tree, m, tolerance_mm);
+      const float share = share_landing_on_itself(surface, m, tolerance_mm);
       double sq = 0;
       for (int i = 0; i < n - k; ++i) sq += (m * from.col(i) - to.col(i)).squaredNorm();
       const float rms = float(std::sqrt(sq / double(n - k)));
@@ -181,11 +166,17 @@ std::vector<Slide> find_slides(const SurfaceSamples& surface, const Centreline& 
   return found;
 }
 
-float share_landing_on_itself(const SurfaceSamples& surface, const Pose& m, float tolerance_mm) {
-  if (surface.points.empty()) return 0.0f;
-  KdTree3 tree;
-  tree.build(surface.points.data(), surface.points.size());
-  return landing_share(surface, tree, m, tolerance_mm);
+float share_landing_on_itself(const SurfaceIndex& index, const Pose& m, float tolerance_mm) {
+  const SurfaceSamples& surface = index.surface;
+  const std::size_t stride = std::max<std::size_t>(1, surface.points.size() / kLandingSamples);
+  int within = 0, n = 0;
+  for (std::size_t i = 0; i < surface.points.size(); i += stride, ++n) {
+    int idx = 0;
+    float d2 = 0;
+    within += index.tree.nearest_within((m * surface.points[i].cast<double>()).cast<float>(), tolerance_mm,
+                                        &idx, &d2);
+  }
+  return n > 0 ? float(within) / float(n) : 0.0f;
 }
 
 }  // namespace pipeloc

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "core/pose.hpp"
+#include "model/neighbors.hpp"
 #include "model/pipe_model.hpp"
 
 namespace pipeloc {
@@ -35,14 +36,24 @@ struct Slide {
   float centreline_rms_mm = 0;  // of the centreline's overlapping part from itself moved
 };
 
+// The surface samples with their k-d tree, built once for the searches below. The samples must
+// outlive it.
+struct SurfaceIndex {
+  explicit SurfaceIndex(const SurfaceSamples& samples) : surface(samples) {
+    tree.build(surface.points.data(), surface.points.size());
+  }
+  const SurfaceSamples& surface;
+  KdTree3 tree;
+};
+
 // For each arc length s (mm, both signs), the rigid motion taking the centreline onto itself moved
 // by s (least squares over the part that overlaps); kept when at least min_share of the surface
 // samples land within tolerance_mm of the surface and the centreline lands on itself within 3 % of
 // D (model/slides.cpp). None for a part whose shape changes along it.
-std::vector<Slide> find_slides(const SurfaceSamples& surface, const Centreline& centreline, float tube_d_mm,
+std::vector<Slide> find_slides(const SurfaceIndex& surface, const Centreline& centreline, float tube_d_mm,
                                const std::vector<float>& arc_mm, float tolerance_mm, float min_share);
 
 // The share of the surface samples that land within tolerance_mm of the surface after motion m.
-float share_landing_on_itself(const SurfaceSamples& surface, const Pose& m, float tolerance_mm);
+float share_landing_on_itself(const SurfaceIndex& surface, const Pose& m, float tolerance_mm);
 
 }  // namespace pipeloc
