@@ -812,5 +812,32 @@ TEST(Locator, EmptyAndInvalidFramesGiveNothingAndDoNotCrash) {
   EXPECT_TRUE(loc.locate(depth, cam).estimates.empty());
 }
 
+// The PLC's pick: of the pickable poses, the first searches' before the second searches', and of
+// each a pose an end of which the image shows ending outright before one it does not (a pose
+// pinned only past a hidden tip may lie slid along its pipe), in rank order.
+TEST(LocateOutput, APoseSeenEndingOutrightIsHandedOutBeforeOneThatIsNot) {
+  const auto estimate = [](bool pickable, int seen_ending, bool searched_again) {
+    PipeEstimate e;
+    e.pickable = pickable;
+    e.check.ends_pinned = e.check.ends_seen_ending = seen_ending;
+    e.searched_again = searched_again;
+    return e;
+  };
+  LocateOutput out;
+  out.estimates = {estimate(true, 0, false), estimate(false, 2, false), estimate(true, 1, true),
+                   estimate(true, 1, false), estimate(true, 2, false)};
+  EXPECT_EQ(out.pick(), 3);  // not 0, its ends not seen ending; nor 1, not pickable; nor 2, searched again
+  EXPECT_EQ(LocateOutput::hand_out_order(out.estimates[0]), 1);
+  EXPECT_EQ(LocateOutput::hand_out_order(out.estimates[1]), -1);
+  EXPECT_EQ(LocateOutput::hand_out_order(out.estimates[2]), 2);
+  EXPECT_EQ(LocateOutput::hand_out_order(out.estimates[3]), 0);
+  out.estimates = {estimate(true, 0, false), estimate(true, 0, false), estimate(true, 1, true)};
+  EXPECT_EQ(out.pick(), 0);  // none seen ending: the best of the first searches
+  out.estimates = {estimate(false, 0, false), estimate(true, 0, true), estimate(true, 1, true)};
+  EXPECT_EQ(out.pick(), 2);  // the first searches hand out none: the second searches', ends first
+  out.estimates = {estimate(false, 1, false)};
+  EXPECT_EQ(out.pick(), -1);
+}
+
 }  // namespace
 }  // namespace pipeloc

@@ -32,16 +32,24 @@ struct LocateOutput {
   float lowest_surface_z_mm = 0;  // bin frame: the floor where it is seen (no pose lies below it)
   PixelBox view;  // the pixels the sensor reads: the image less its edges' dead bands (read_view)
   bool budget_exhausted = false;
-  // The pose handed to the PLC: the best pickable of the first searches; only where they have
-  // none, the best pickable of the second searches (second_search_may_pick). -1: none.
+  // The order the pickable poses are handed out in, lower first (-1: not handed out): the first
+  // searches' before the second searches' (second_search_may_pick: those only where the first
+  // have none), and of each, a pose an end of which the image shows ending outright before one
+  // it does not, in rank order. A pose pinned only past a hidden tip may lie slid along its pipe:
+  // an arc wholly in view so handed out 30-57 mm round itself before a right pose of another arc
+  // with an end seen ending ranked second (4 wrong picks clearing 3 bins; docs/experiments.md).
+  static constexpr int kHandOutOrders = 4;
+  static int hand_out_order(const PipeEstimate& e) {
+    if (!e.pickable) return -1;
+    return (e.searched_again ? 2 : 0) + (e.check.ends_seen_ending > 0 ? 0 : 1);
+  }
+  // The pose handed to the PLC: the first in that order. -1: none.
   int pick() const {
-    int again = -1;
-    for (std::size_t i = 0; i < estimates.size(); ++i) {
-      if (!estimates[i].pickable) continue;
-      if (!estimates[i].searched_again) return int(i);
-      if (again < 0) again = int(i);
-    }
-    return again;
+    int first = -1, first_order = kHandOutOrders;
+    for (std::size_t i = 0; i < estimates.size(); ++i)
+      if (const int order = hand_out_order(estimates[i]); order >= 0 && order < first_order)
+        first = int(i), first_order = order;
+    return first;
   }
 };
 

@@ -85,7 +85,7 @@ class Service {
   Frame frame_;
   TimingLog log_;
   Pose robot_from_camera_, grasp_;
-  std::vector<Ranked> ranked_;  // pickable poses of the last LOCATE, best first
+  std::vector<Ranked> ranked_;  // pickable poses of the last LOCATE, in the order handed out
   int index_ = -1;
   bool pick_pending_ = false;
   std::uint32_t cycles_ = 0;
