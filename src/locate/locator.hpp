@@ -43,12 +43,20 @@ struct LocateOutput {
     if (!e.pickable) return -1;
     return (e.searched_again ? 2 : 0) + (e.check.ends_seen_ending > 0 ? 0 : 1);
   }
+  // Calls f(i) for each estimate handed out, in that order, until f returns false.
+  template <typename F>
+  void for_each_handed_out(F f) const {
+    for (int order = 0; order < kHandOutOrders; ++order)
+      for (std::size_t i = 0; i < estimates.size(); ++i)
+        if (hand_out_order(estimates[i]) == order && !f(int(i))) return;
+  }
   // The pose handed to the PLC: the first in that order. -1: none.
   int pick() const {
-    int first = -1, first_order = kHandOutOrders;
-    for (std::size_t i = 0; i < estimates.size(); ++i)
-      if (const int order = hand_out_order(estimates[i]); order >= 0 && order < first_order)
-        first = int(i), first_order = order;
+    int first = -1;
+    for_each_handed_out([&](int i) {
+      first = i;
+      return false;
+    });
     return first;
   }
 };

@@ -148,18 +148,17 @@ void Service::locate(Clock::time_point trigger) {
     // in flight and the publishing still fit the budget.
     const auto margin = ms_duration(std::min(5.0, 0.1 * cfg_.service.budget_ms));
     const LocateOutput& out = locator_.locate_to_pick(frame_.depth_mm, frame_.camera, deadline - margin);
-    // The PLC's poses in the order they are handed out (LocateOutput::hand_out_order): the first
-    // is the pick.
-    for (int order = 0; order < LocateOutput::kHandOutOrders; ++order)
-      for (const PipeEstimate& e : out.estimates) {
-        if (LocateOutput::hand_out_order(e) != order || int(ranked_.size()) >= cfg_.locate.result_cap())
-          continue;
-        Ranked r;
-        r.model_to_cam = e.model_to_cam;
-        r.robot = to_robot(e.model_to_cam, robot_from_camera_, grasp_, cfg_.plc.euler);
-        r.score = e.score;
-        ranked_.push_back(r);
-      }
+    // The PLC's poses in the order they are handed out: the first is the pick.
+    out.for_each_handed_out([&](int i) {
+      if (int(ranked_.size()) >= cfg_.locate.result_cap()) return false;
+      const PipeEstimate& e = out.estimates[std::size_t(i)];
+      Ranked r;
+      r.model_to_cam = e.model_to_cam;
+      r.robot = to_robot(e.model_to_cam, robot_from_camera_, grasp_, cfg_.plc.euler);
+      r.score = e.score;
+      ranked_.push_back(r);
+      return true;
+    });
     record_.stages = out.times;
     record_.candidates = int(out.traces.size());
     for (const CandidateTrace& t : out.traces) record_.tried += t.outcome != CandidateOutcome::budget;
