@@ -601,6 +601,34 @@ TEST(Decide, APoseIsHandedOutOnlyWhereTheSensorResolvesTheTube) {
   EXPECT_FALSE(d.unresolved);
 }
 
+// An accepted pose that is not handed out says why: a bit for each check it fails, none where it
+// is pickable (the overlay's label, `locate`'s `withheld`, the timing log's counts).
+TEST(Decide, APoseNotHandedOutSaysWhy) {
+  LocateConfig cfg;
+  const auto why = [&](const Evidence& e) {
+    const Decision d = decide(e, cfg);
+    EXPECT_EQ(d.outcome, CandidateOutcome::accepted);
+    EXPECT_EQ(d.withheld == 0, d.pickable) << "withheld " << d.withheld;
+    return d.withheld;
+  };
+  EXPECT_EQ(why(judged(seen(950, 0, 0))), 0u);
+  EXPECT_EQ(why(judged_with_rival(seen(950, 0, 0), seen(950, 0, 0))), unsigned(kWithheldAmbiguous));
+  EXPECT_EQ(why(judged(seen(800, 0, 200))), unsigned(kWithheldCovered));  // 20 % under others
+  EXPECT_EQ(why(judged(outside_view(seen(950, 0, 0), 0.6f))), unsigned(kWithheldPartSeen));
+  EXPECT_EQ(why(ends_read(judged(seen(950, 0, 0)), 0, 2, 0, 0)), unsigned(kWithheldGoesOn | kWithheldNoEnd));
+  EXPECT_EQ(why(ends_read(judged(seen(950, 0, 0)), 0, 0, 0, 0)), unsigned(kWithheldNoEnd));
+  EXPECT_EQ(why(searched_again(judged(with_sides(seen(800, 0, 0), 100, 10)))),
+            unsigned(kWithheldSecondSearch));
+  Verification small = seen_on(38, 40);
+  cfg.frame_noise_mm = 5;  // 2.7 sigmas: the sensor does not resolve the tube
+  EXPECT_EQ(why(judged(small)), unsigned(kWithheldUnresolved));
+  small.occluded_px = 8;  // and it lies under another pipe: both said
+  EXPECT_EQ(why(judged(small)), unsigned(kWithheldCovered | kWithheldUnresolved));
+  for (int k = 0; k < kWithheldKinds; ++k) EXPECT_STRNE(withheld_name(k), "?");
+  EXPECT_STREQ(withheld_name(0), "ambiguous");
+  EXPECT_STREQ(withheld_label(kWithheldKinds - 1), "NOISY");
+}
+
 // The pixels telling a pose from its rival are read at 3 sigmas of the frame's noise where that
 // is finer than the verify tolerance; with no noise measured, at the tolerance.
 TEST(Decide, TellingPixelsAreReadAtTheNoiseWhereItIsFinerThanTheTolerance) {

@@ -654,22 +654,28 @@ TEST(Service, APipeTheSensorDoesNotResolveIsNotHandedOut) {
   cfg.source.sim.camera_height_min_mm = 1000, cfg.source.sim.camera_height_max_mm = 1070;
   const PipeModel elbow = thin_elbow();
   Service service(cfg, elbow, std::make_unique<SimSource>(elbow, cfg.source.sim));
-  int unresolved = 0;
+  int unresolved = 0, noisy = 0;
   constexpr int kLocates = 8;
   for (int i = 0; i < kLocates; ++i) {
     const reg::Result& r = service.run(1, std::uint16_t(i + 1), Clock::now());
     EXPECT_EQ(r.status, reg::Status::done_none) << "LOCATE " << i;
     unresolved += service.record().unresolved;
+    noisy += service.record().withheld[std::size_t(withheld_index(kWithheldUnresolved))];
     service.log().write(service.record());
   }
   EXPECT_GT(unresolved, 0) << "no pose held back for the noise: the test shows nothing";
+  // Every pose held back only for the noise is counted as noisy; some fail other checks as well.
+  EXPECT_GE(noisy, unresolved);
   std::istringstream in(test::read_text(service.log().path()));
-  int logged = 0;
+  int logged = 0, logged_noisy = 0;
   for (std::string line; std::getline(in, line);) {
     const nlohmann::json j = nlohmann::json::parse(line);
-    if (j["event"] == "cycle") logged += j["unresolved"].get<int>();
+    if (j["event"] != "cycle") continue;
+    logged += j["unresolved"].get<int>();
+    logged_noisy += j["withheld"]["noisy"].get<int>();
   }
   EXPECT_EQ(logged, unresolved);
+  EXPECT_EQ(logged_noisy, noisy);
 }
 
 TEST(Service, TimingLogHasALinePerCycleAndSummaries) {
@@ -693,6 +699,7 @@ TEST(Service, TimingLogHasALinePerCycleAndSummaries) {
                               "regions_ms", "ridge_icp_ms", "locate_ms", "again_ms", "cycle_ms", "candidates",
                               "tried", "unresolved", "status", "score", "budget_use"})
         EXPECT_TRUE(j.contains(key)) << key;
+      for (int k = 0; k < kWithheldKinds; ++k) EXPECT_TRUE(j["withheld"].contains(withheld_name(k))) << k;
       EXPECT_GE(j["again_ms"].get<double>(), 0.0);
       if (j["cmd"] == 1) {
         EXPECT_GT(j["frame_age_ms"].get<double>(), 0.0);

@@ -60,6 +60,10 @@ Json estimate_json(const PipeEstimate& e, int rank, bool pick) {
             {"model_px", e.check.model_px},
             {"relief_sigmas", e.relief_sigmas},
             {"unresolved", e.unresolved}};
+  Json withheld = Json::array();  // why it is not handed out (empty where it is pickable)
+  for (int k = 0; k < kWithheldKinds; ++k)
+    if (e.withheld & (1u << k)) withheld.push_back(withheld_name(k));
+  j["withheld"] = withheld;
   j.update(verification_json(e.check));
   return j;
 }

@@ -208,6 +208,18 @@ const char* outcome_name(CandidateOutcome o) {
   return "?";
 }
 
+const char* withheld_name(int k) {
+  static const char* const names[kWithheldKinds] = {"ambiguous", "covered",       "part_seen", "goes_on",
+                                                    "no_end",    "second_search", "noisy"};
+  return k >= 0 && k < kWithheldKinds ? names[k] : "?";
+}
+
+const char* withheld_label(int k) {
+  static const char* const labels[kWithheldKinds] = {"AMBIGUOUS", "COVERED", "PART SEEN", "GOES ON",
+                                                     "NO END",    "UNSURE",  "NOISY"};
+  return k >= 0 && k < kWithheldKinds ? labels[k] : "?";
+}
+
 namespace {
 // Whether a and b, further apart than one pipe's duplicates and confirmed by the image about as
 // well, put one pipe's tube in one place: kRivalMinSharedTube of it one way or the other, or, where
@@ -415,6 +427,12 @@ Decision decide(const Evidence& given, const LocateConfig& cfg) {
       !(cfg.pick_min_relief_sigmas > 0) || out.relief_sigmas >= float(cfg.pick_min_relief_sigmas);
   out.pickable = placed && resolved;
   out.unresolved = placed && !resolved;
+  const bool covered = e.best.occluded() > float(cfg.verify_max_occluded);
+  const bool second_unsure = e.searched_again && !second_search_placed;
+  out.withheld = (out.ambiguous ? kWithheldAmbiguous : 0u) | (covered ? kWithheldCovered : 0u) |
+                 (checked_in_view ? 0u : kWithheldPartSeen) | (ends_go_on ? kWithheldGoesOn : 0u) |
+                 (unplaced_in_view ? kWithheldNoEnd : 0u) | (second_unsure ? kWithheldSecondSearch : 0u) |
+                 (resolved ? 0u : kWithheldUnresolved);
   return out;
 }
 
@@ -995,6 +1013,7 @@ bool work_candidate(const CandidateContext& ctx, const CandidateInput& in, const
   estimate->score = decision.score;
   estimate->pickable = decision.pickable;
   estimate->unresolved = decision.unresolved;
+  estimate->withheld = decision.withheld;
   estimate->relief_sigmas = decision.relief_sigmas;
   estimate->searched_again = in.searched_again;
   return true;

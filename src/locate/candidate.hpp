@@ -59,6 +59,31 @@ constexpr double kTellingToleranceOfSigma = 3.0;
 // The depth difference that makes a pixel telling, and within which a reading speaks for a render.
 float telling_tolerance_mm(const LocateConfig& cfg);
 
+// Why an accepted pose is not handed out: one bit per check it fails (0 for a pickable pose). The
+// overlay names the first bit set, in this order; `locate` and the timing log name them all.
+enum Withheld : unsigned {
+  kWithheldAmbiguous = 1u << 0,     // a rival the image judges about as well (a near twin, the pipe
+                                    // slid along or turned about itself, one pipe read two ways)
+  kWithheldCovered = 1u << 1,       // more than verify_max_occluded of it under something in front
+  kWithheldPartSeen = 1u << 2,      // too much of it out of the view, or too little confirmed
+  kWithheldGoesOn = 1u << 3,        // the tube goes on beyond both ends: the pipe lies elsewhere
+  kWithheldNoEnd = 1u << 4,         // wholly in view, and no end seen ending
+  kWithheldSecondSearch = 1u << 5,  // a second search's pose the image confirms too little
+  kWithheldUnresolved = 1u << 6,    // the sensor does not resolve the tube (pick_min_relief_sigmas)
+};
+constexpr int kWithheldKinds = 7;
+// The bit's place: the index of its count (CycleRecord::withheld) and of its name.
+constexpr int withheld_index(unsigned bit) {
+  int k = 0;
+  while (k < kWithheldKinds && bit != (1u << k)) ++k;
+  return k;
+}
+// The bit's name (`ambiguous`, `covered`, `part_seen`, `goes_on`, `no_end`, `second_search`,
+// `noisy`) and the overlay's label for it (AMBIGUOUS, COVERED, PART SEEN, GOES ON, NO END, UNSURE,
+// NOISY); k-th bit for k in [0, kWithheldKinds).
+const char* withheld_name(int k);
+const char* withheld_label(int k);
+
 struct PipeEstimate {
   Pose model_to_bin = Pose::Identity();
   Pose model_to_cam = Pose::Identity();
@@ -75,6 +100,7 @@ struct PipeEstimate {
   bool searched_again = false;  // found by its region's second search: picked only if no other is
   float relief_sigmas = 0;      // the tube's relief against the frame's noise (tube_relief_sigmas)
   bool unresolved = false;      // pickable but for that relief (pick_min_relief_sigmas)
+  unsigned withheld = 0;        // why it is not pickable (Withheld bits; 0 where it is)
 };
 
 // How plainly the image shows a tube at a pose: the RMS by which a tube's top departs from the
@@ -162,6 +188,7 @@ struct Decision {
   bool rival_taken = false;  // the rival, not the best, is the pipe (its ends shown where they are)
   bool unresolved = false;   // pickable but for the tube's relief against the noise
   float relief_sigmas = 0;   // of the pose judged (tube_relief_sigmas)
+  unsigned withheld = 0;     // why it is not pickable (Withheld bits)
 };
 
 // The outcome of a candidate from its evidence: the first check it fails (in the order of the

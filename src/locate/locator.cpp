@@ -394,6 +394,7 @@ void Locator::mark_pipes_read_two_ways() {
         if (!e->ambiguous) e->score *= kAmbiguousScoreFactor;
         e->ambiguous = true;
         e->pickable = e->unresolved = false;
+        e->withheld |= kWithheldAmbiguous;
       }
     }
   es.erase(std::remove_if(es.begin(), es.end(), dropped), es.end());

@@ -45,10 +45,17 @@ void draw_legend(Image<Rgb>* img) {
   struct Entry {
     Rgb color;
     const char* text;
+    bool swatch = true;  // false: the line goes on explaining the entry above
   };
   const Entry entries[] = {{kPick, "PICK: POSE HANDED TO THE PLC"},
                            {kOutline, "POSE, PICKABLE (R<RANK> <SCORE> OK)"},
-                           {kOther, "POSE, NOT PICKABLE (NO, NOISY: UNRESOLVED)"},
+                           {kOther, "POSE, NOT PICKABLE (R<RANK> <SCORE> WHY):"},
+                           {kOther, " AMBIGUOUS: A TWIN OR SLID POSE FITS AS WELL", false},
+                           {kOther, " COVERED: UNDER OTHERS  PART SEEN: TOO LITTLE SEEN", false},
+                           {kOther, " GOES ON: THE TUBE GOES ON PAST BOTH ENDS", false},
+                           {kOther, " NO END: NO END SEEN ENDING", false},
+                           {kOther, " UNSURE: SECOND SEARCH, TOO LITTLE CONFIRMED", false},
+                           {kOther, " NOISY: THE SENSOR DOES NOT RESOLVE THE TUBE", false},
                            {kCore, "CORE REGION (UPWARD NORMALS)"},
                            {kRegion, "CANDIDATE REGION (GROWN)"},
                            {kAxis, "PRINCIPAL DIRECTION"},
@@ -64,7 +71,7 @@ void draw_legend(Image<Rgb>* img) {
       if (img->inside(x, y)) img->at(x, y) = {20, 20, 20};
   int y = y0 + 3;
   for (const Entry& e : entries) {
-    for (int dy = 0; dy < 5; ++dy)
+    for (int dy = 0; dy < 5 && e.swatch; ++dy)
       for (int dx = 0; dx < 8; ++dx)
         if (img->inside(x0 + 3 + dx, y + dy)) img->at(x0 + 3 + dx, y + dy) = e.color;
     draw_text(img, x0 + 15, y, e.text, {235, 235, 235}, scale);
@@ -174,12 +181,13 @@ Image<Rgb> draw_locate_overlay(const Locator& loc, const Image<float>& depth, co
     const PipeEstimate& e = out.estimates[std::size_t(i)];
     const Eigen::Vector2d c =
         cam.intrinsics.project(e.model_to_cam * loc.locator_model().centroid.cast<double>());
-    char text[48];
-    std::snprintf(text, sizeof text, "%sR%d %.2f%s", i == pick ? "PICK " : "", i, e.score,
-                  i == pick      ? ""
-                  : e.pickable   ? " OK"
-                  : e.unresolved ? " NOISY"
-                                 : " NO");
+    // Not pickable: the first check it fails (Withheld's order), NO where none is named.
+    int first = 0;
+    while (first < kWithheldKinds && !(e.withheld & (1u << first))) ++first;
+    const char* why = first < kWithheldKinds ? withheld_label(first) : "NO";
+    char tail[16] = "", text[48];
+    if (i != pick) std::snprintf(tail, sizeof tail, " %s", e.pickable ? "OK" : why);
+    std::snprintf(text, sizeof text, "%sR%d %.2f%s", i == pick ? "PICK " : "", i, e.score, tail);
     draw_label(&img, int(c.x()) + 12, int(c.y()) - 16, text,
                i == pick    ? kPick
                : e.pickable ? kOutline

@@ -1,6 +1,7 @@
 // What one cycle of the service did, for the PLC registers and the timing log.
 #pragma once
 
+#include <array>
 #include <cstdint>
 
 #include "locate/locator.hpp"
@@ -24,6 +25,8 @@ struct CycleRecord {
   int candidates = 0, tried = 0, accepted = 0;  // regions, regions worked, estimates
   int count = 0;                                // poses handed out (pickable, ranked)
   int unresolved = 0;  // estimates pickable but for the tube's relief against the noise
+  // Estimates not pickable, by the checks they fail (Withheld's bits; one may fail several).
+  std::array<int, kWithheldKinds> withheld{};
   float score = 0;                              // of the pose presented
   bool budget_exhausted = false;
   bool cut_by_shutdown = false;  // stopped by SIGTERM/SIGINT/SIGHUP, not by the budget

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <stdexcept>
@@ -144,6 +145,19 @@ TimingLog::Summary TimingLog::summary() const {
   return s;
 }
 
+namespace {
+// "ambiguous":n,... for every Withheld bit, in its order, into a fixed buffer (no allocation per cycle).
+struct WithheldText {
+  char text[256] = "";
+  explicit WithheldText(const CycleRecord& r) {
+    int at = 0;
+    for (int k = 0; k < kWithheldKinds && at < int(sizeof text); ++k)
+      at += std::snprintf(text + at, sizeof text - std::size_t(at), "%s\"%s\":%d", k ? "," : "",
+                          withheld_name(k), r.withheld[std::size_t(k)]);
+  }
+};
+}  // namespace
+
 void TimingLog::write(const CycleRecord& r) {
   const StageTimes& t = r.stages;
   const int n = std::snprintf(
@@ -155,14 +169,14 @@ void TimingLog::write(const CycleRecord& r) {
       "\"locate_ms\":%.2f,\"again_ms\":%.2f,\"cycle_ms\":%.2f,\"budget_ms\":%.1f,\"budget_use\":%.3f,"
       "\"budget_exhausted\":%s,"
       "\"candidates\":%d,\"tried\":%d,\"accepted\":%d,\"count\":%d,\"unresolved\":%d,\"score\":%.4f,"
-      "\"status\":\"%s\",\"error\":\"%s\"}\n",
+      "\"status\":\"%s\",\"error\":\"%s\",\"withheld\":{%s}}\n",
       (unsigned long long)r.cycle, unsigned(r.command), unsigned(r.req_id), r.trigger_unix_ms,
       (unsigned long long)r.frame_sequence, r.queued_ms, grab_status_name(r.grab), r.frame_check, r.grab_ms,
       r.frame_age_ms, t.zbuffer_ms, t.normals_ms, t.regions_ms, t.axis_ms, t.ridge_icp_ms, t.refine_ms,
       t.verify_ms, t.total_ms - t.again_ms, t.again_ms, r.cycle_ms, r.budget_ms,
       r.budget_ms > 0 ? r.cycle_ms / r.budget_ms : 0.0, r.budget_exhausted ? "true" : "false", r.candidates,
       r.tried, r.accepted, r.count, r.unresolved, double(r.score), status_name(r.status),
-      r.cut_by_shutdown ? "shutdown" : error_name(r.error));
+      r.cut_by_shutdown ? "shutdown" : error_name(r.error), WithheldText(r).text);
   put(line_, n);
   if (r.command != std::uint16_t(reg::Command::locate)) return;
   window_.push_back(r.cycle_ms);

@@ -26,6 +26,12 @@ for t in traces:
         assert len(f["R"]) == 9 and len(f["t_mm"]) == 3, f
     assert all("residual_mm" in f for f in t["ridge_fits"]) and all("agreement" in h for h in t["hypotheses"]), t
 assert any(t["ridge_fits"] and t["hypotheses"] for t in traces), "no candidate reports the poses it reached"
+# Each pose says why it is not handed out: no check named where it is pickable, one at least where not.
+names = {"ambiguous", "covered", "part_seen", "goes_on", "no_end", "second_search", "noisy"}
+poses = [o for o in objects if "rank" in o]
+assert poses, "no pose"
+for p in poses:
+    assert set(p["withheld"]) <= names and (not p["withheld"]) == p["pickable"], p
 PY
 grep -q "pipes found" "$work/locate.log" || fail "locate logs no summary on stderr: $(cat "$work/locate.log")"
 
