@@ -416,23 +416,22 @@ Decision decide(const Evidence& given, const LocateConfig& cfg) {
   // poses fit clutter, agreeing 0.74-0.86, or 0.94 on a 64-pixel elbow with 17 side pixels.
   const bool second_search_placed =
       cfg.second_search_may_pick && !(e.best.agreement() < well_seen_share) && e.best.side_px >= kMinSidePx;
-  const bool placed = !out.ambiguous && e.best.occluded() <= float(cfg.verify_max_occluded) &&
-                      checked_in_view && !ends_go_on && !unplaced_in_view &&
-                      (!e.searched_again || second_search_placed);
   // ... and only where the sensor resolves the tube (pick_min_relief_sigmas): a thin short elbow a
   // metre under an active-stereo sensor, its tube 1.3 sigmas of the noise in radius, agrees 0.9 at
   // poses 5-27 mm off (13 picks, 1 right; docs/experiments.md).
   out.relief_sigmas = tube_relief_sigmas(e.best, e.tube_d_mm, float(cfg.frame_noise_mm));
   const bool resolved =
       !(cfg.pick_min_relief_sigmas > 0) || out.relief_sigmas >= float(cfg.pick_min_relief_sigmas);
-  out.pickable = placed && resolved;
-  out.unresolved = placed && !resolved;
+  // Each check that holds the pose back is a bit: pickable where none is set; unresolved where the
+  // relief alone is.
   const bool covered = e.best.occluded() > float(cfg.verify_max_occluded);
   const bool second_unsure = e.searched_again && !second_search_placed;
   out.withheld = (out.ambiguous ? kWithheldAmbiguous : 0u) | (covered ? kWithheldCovered : 0u) |
                  (checked_in_view ? 0u : kWithheldPartSeen) | (ends_go_on ? kWithheldGoesOn : 0u) |
                  (unplaced_in_view ? kWithheldNoEnd : 0u) | (second_unsure ? kWithheldSecondSearch : 0u) |
                  (resolved ? 0u : kWithheldUnresolved);
+  out.pickable = out.withheld == 0;
+  out.unresolved = out.withheld == kWithheldUnresolved;
   return out;
 }
 

@@ -163,7 +163,6 @@ void Service::locate(Clock::time_point trigger) {
     record_.candidates = int(out.traces.size());
     for (const CandidateTrace& t : out.traces) record_.tried += t.outcome != CandidateOutcome::budget;
     record_.accepted = int(out.estimates.size());
-    record_.withheld.fill(0);
     for (const PipeEstimate& e : out.estimates)
       for (int k = 0; k < kWithheldKinds; ++k) record_.withheld[std::size_t(k)] += (e.withheld >> k) & 1u;
     record_.cut_by_shutdown = out.budget_exhausted && cancel_ && cancel_->load();
