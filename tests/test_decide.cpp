@@ -627,6 +627,9 @@ TEST(Decide, APoseNotHandedOutSaysWhy) {
   for (int k = 0; k < kWithheldKinds; ++k) EXPECT_STRNE(withheld_name(k), "?");
   EXPECT_STREQ(withheld_name(0), "ambiguous");
   EXPECT_STREQ(withheld_label(kWithheldKinds - 1), "NOISY");
+  EXPECT_EQ(withheld_index(kWithheldUnresolved), kWithheldKinds - 1);
+  EXPECT_EQ(withheld_index(kWithheldCovered | kWithheldUnresolved), 1);  // the first check failed
+  EXPECT_EQ(withheld_index(0), kWithheldKinds);
 }
 
 // The pixels telling a pose from its rival are read at 3 sigmas of the frame's noise where that

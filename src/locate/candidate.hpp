@@ -72,10 +72,12 @@ enum Withheld : unsigned {
   kWithheldUnresolved = 1u << 6,    // the sensor does not resolve the tube (pick_min_relief_sigmas)
 };
 constexpr int kWithheldKinds = 7;
-// The bit's place: the index of its count (CycleRecord::withheld) and of its name.
-constexpr int withheld_index(unsigned bit) {
+// The place of the first bit set, in Withheld's order: a bit's own place (the index of its count,
+// CycleRecord::withheld, and of its name), or the first check a pose fails (the overlay's label);
+// kWithheldKinds where none is set.
+constexpr int withheld_index(unsigned bits) {
   int k = 0;
-  while (k < kWithheldKinds && bit != (1u << k)) ++k;
+  while (k < kWithheldKinds && !(bits & (1u << k))) ++k;
   return k;
 }
 // The bit's name (`ambiguous`, `covered`, `part_seen`, `goes_on`, `no_end`, `second_search`,

@@ -182,8 +182,7 @@ Image<Rgb> draw_locate_overlay(const Locator& loc, const Image<float>& depth, co
     const Eigen::Vector2d c =
         cam.intrinsics.project(e.model_to_cam * loc.locator_model().centroid.cast<double>());
     // Not pickable: the first check it fails (Withheld's order), NO where none is named.
-    int first = 0;
-    while (first < kWithheldKinds && !(e.withheld & (1u << first))) ++first;
+    const int first = withheld_index(e.withheld);
     const char* why = first < kWithheldKinds ? withheld_label(first) : "NO";
     char tail[16] = "", text[48];
     if (i != pick) std::snprintf(tail, sizeof tail, " %s", e.pickable ? "OK" : why);
