@@ -2,6 +2,7 @@
 // budget and results, the timing log. Data come from the project's simulator.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -16,6 +17,7 @@
 #include "service/replay_source.hpp"
 #include "service/service.hpp"
 #include "service/sim_source.hpp"
+#include "service/tried_picks.hpp"
 #include "sim/dataset_writer.hpp"
 #include "sim_config.hpp"
 
@@ -435,6 +437,122 @@ TEST(Service, ASmallBinIsClearedWithoutAWrongPick) {
   }
   EXPECT_EQ(wrong, 0);
   EXPECT_TRUE(sim->pipes_in_camera().empty()) << sim->pipes_in_camera().size() << " of 5 pipes left";
+}
+
+// TriedPicks: the pose handed out last becomes a tried one where the next frame reads as before
+// around it, stays so while it does, and is forgotten once its pipe is taken; a pick that took its
+// pipe is never a tried one.
+TEST(TriedPicks, APoseIsTriedWhileTheBinReadsAsBeforeThere) {
+  SimSourceConfig cfg;
+  cfg.pipes = 1;
+  cfg.seed = 11;
+  cfg.refill = false;
+  SimSource src(sbend(), cfg);
+  const Locator loc(sbend(), LocateConfig{}, src.intrinsics());  // the model's check points
+  const float d = loc.locator_model().tube_d_mm;
+  Frame f;
+  f.depth_mm.resize(src.intrinsics().width, src.intrinsics().height);
+  const auto grab = [&] { return src.grab(Clock::now(), Clock::now() + std::chrono::seconds(1), &f); };
+  ASSERT_EQ(grab(), GrabStatus::ok);
+  const Pose pipe = src.pipes_in_camera().at(0);
+  TriedPicks tried;
+  tried.handed_out(pipe, f.depth_mm, src.intrinsics(), loc.locator_model());
+  ASSERT_EQ(grab(), GrabStatus::ok);  // the robot went there, the pipe stayed: fresh noise only
+  tried.next_frame(f.depth_mm, d);
+  ASSERT_EQ(tried.size(), 1);
+  EXPECT_LT((tried.poses()[0].translation() - pipe.translation()).norm(), 1e-9);
+  ASSERT_EQ(grab(), GrabStatus::ok);
+  tried.next_frame(f.depth_mm, d);
+  EXPECT_EQ(tried.size(), 1);  // still as it was
+  // Never more than the locator takes: the oldest goes.
+  for (int i = 0; i < Locator::kMaxTried + 2; ++i) {
+    tried.handed_out(pipe, f.depth_mm, src.intrinsics(), loc.locator_model());
+    tried.next_frame(f.depth_mm, d);
+  }
+  EXPECT_EQ(tried.size(), Locator::kMaxTried);
+  tried.clear();
+  tried.handed_out(pipe, f.depth_mm, src.intrinsics(), loc.locator_model());
+  tried.next_frame(f.depth_mm, d);
+  ASSERT_EQ(tried.size(), 1);
+  // Handed out again and taken this time: the pick changed the bin there, so neither is tried.
+  tried.handed_out(pipe, f.depth_mm, src.intrinsics(), loc.locator_model());
+  src.picked(pipe);
+  ASSERT_TRUE(src.pipes_in_camera().empty());
+  ASSERT_EQ(grab(), GrabStatus::ok);
+  tried.next_frame(f.depth_mm, d);
+  EXPECT_EQ(tried.size(), 0);
+}
+
+// A gripper that closes on nothing: the simulator's frames, but no pick takes a pipe.
+class GripperTakesNothing : public FrameSource {
+ public:
+  GripperTakesNothing(const PipeModel& model, const SimSourceConfig& cfg) : sim_(model, cfg) {}
+  const char* kind() const override { return "sim, no pick takes"; }
+  const Intrinsics& intrinsics() const override { return sim_.intrinsics(); }
+  std::string describe() const override { return sim_.describe(); }
+  GrabStatus grab(Clock::time_point after, Clock::time_point deadline, Frame* out) override {
+    return sim_.grab(after, deadline, out);
+  }
+  const SimSource& sim() const { return sim_; }
+
+ private:
+  SimSource sim_;
+};
+
+// The pipe of the bin nearest a pose (MSSD), -1 where none is within 10 mm.
+int pipe_at(const SimSource& sim, const Pose& pose) {
+  std::vector<Eigen::Vector3d> v;
+  for (const auto& p : sbend().mesh.vertices) v.push_back(p.cast<double>());
+  const std::vector<Pose> pipes = sim.pipes_in_camera();
+  int best = -1;
+  double best_err = 10.0;
+  for (std::size_t i = 0; i < pipes.size(); ++i) {
+    const double err = mssd(v, pose, pipes[i], {}, best_err);
+    if (err <= best_err) best_err = err, best = int(i);
+  }
+  return best;
+}
+
+// A pose whose pick left the bin as it was is not handed out again while it stays so
+// (service.withhold_unchanged_picks): the robot is sent to each pipe once, then the service answers
+// DONE_NONE and names the poses withheld as tried. Turned off, the same pipes come again and again.
+TEST(Service, APoseWhosePickTookNothingIsNotHandedOutAgain) {
+  for (const bool withhold : {true, false}) {
+    SCOPED_TRACE(withhold ? "withheld" : "handed out again");
+    test::TempDir dir;
+    AppConfig cfg = test::sim_config(dir, 3, 21);
+    cfg.source.sim.refill = false;
+    cfg.service.budget_ms = 20000;  // the picks are tested here, not the time
+    cfg.service.withhold_unchanged_picks = withhold;
+    auto src = std::make_unique<GripperTakesNothing>(sbend(), cfg.source.sim);
+    const GripperTakesNothing* gripper = src.get();
+    Service service(cfg, sbend(), std::move(src));
+    std::vector<int> pipes_handed_out;
+    int tried = 0;
+    reg::Status last = reg::Status::ready;
+    for (int cycle = 1; cycle <= 6; ++cycle) {
+      const reg::Result& r = service.run(1, std::uint16_t(cycle), Clock::now());
+      last = r.status;
+      tried = service.record().withheld[std::size_t(withheld_index(kWithheldTried))];
+      if (r.status != reg::Status::done_ok) break;
+      pipes_handed_out.push_back(pipe_at(gripper->sim(), *service.presented()));
+      EXPECT_GE(pipes_handed_out.back(), 0) << "cycle " << cycle << ": a wrong pose";
+      service.after_publish();  // the robot goes there and takes nothing
+    }
+    ASSERT_EQ(gripper->sim().pipes_in_camera().size(), 3u);
+    if (withhold) {
+      EXPECT_EQ(last, reg::Status::done_none);
+      ASSERT_GE(pipes_handed_out.size(), 1u);
+      std::vector<int> once = pipes_handed_out;
+      std::sort(once.begin(), once.end());
+      EXPECT_EQ(std::unique(once.begin(), once.end()), once.end()) << "a pipe handed out twice";
+      EXPECT_GE(tried, 1);  // the last LOCATE found them again and says why they are withheld
+    } else {
+      EXPECT_EQ(last, reg::Status::done_ok);
+      EXPECT_EQ(pipes_handed_out.size(), 6u);
+      EXPECT_EQ(tried, 0);
+    }
+  }
 }
 
 // A LOCATE that hands out no pose keeps its frame for the maintainer (log.no_pick_frames): the

@@ -462,6 +462,7 @@ void read_all(const std::string& file, const toml::table& root, AppConfig* cfg) 
   Section service(file, "service", table("service"), eff);
   service.real("budget_ms", &cfg->service.budget_ms, 5, 60000, "ms");
   service.integer("summary_every", &cfg->service.summary_every, 1, 1000000, "cycles");
+  service.boolean("withhold_unchanged_picks", &cfg->service.withhold_unchanged_picks);
   service.finish();
 
   Section plc(file, "plc", table("plc"), eff);

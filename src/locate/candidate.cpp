@@ -210,13 +210,13 @@ const char* outcome_name(CandidateOutcome o) {
 
 const char* withheld_name(int k) {
   static const char* const names[kWithheldKinds] = {"ambiguous", "covered",       "part_seen", "goes_on",
-                                                    "no_end",    "second_search", "noisy"};
+                                                    "no_end",    "second_search", "noisy",     "tried"};
   return k >= 0 && k < kWithheldKinds ? names[k] : "?";
 }
 
 const char* withheld_label(int k) {
   static const char* const labels[kWithheldKinds] = {"AMBIGUOUS", "COVERED", "PART SEEN", "GOES ON",
-                                                     "NO END",    "UNSURE",  "NOISY"};
+                                                     "NO END",    "UNSURE",  "NOISY",     "TRIED"};
   return k >= 0 && k < kWithheldKinds ? labels[k] : "?";
 }
 

@@ -164,6 +164,7 @@ const LocateOutput& Locator::locate_to_pick(const Image<float>& frame_depth, con
     if (slot_filled_[std::size_t(c)]) merge_estimate(c);
   }
   if (cfg_.rivals_across_regions) mark_pipes_read_two_ways();
+  mark_tried();
   rank();
   // Beyond the paper: where the first searches hand out no pose, the second searches may
   // (second_search_may_pick): they run now, before the result, and their poses are judged with
@@ -206,6 +207,7 @@ bool Locator::second_searches(const std::atomic<bool>* interrupt) {
     const int c = to_search_again_[std::size_t(k)];
     if (slot_filled_[std::size_t(c)]) merge_estimate(c);
   }
+  mark_tried();
   rank();
   out_.times.again_ms = ms_since(t);
   out_.times.total_ms = ms_since(frame_start_);
@@ -398,6 +400,28 @@ void Locator::mark_pipes_read_two_ways() {
       }
     }
   es.erase(std::remove_if(es.begin(), es.end(), dropped), es.end());
+}
+
+void Locator::set_tried(const Pose* model_to_cam, int n) {
+  tried_count_ = std::clamp(n, 0, kMaxTried);
+  std::copy_n(model_to_cam, tried_count_, tried_);
+}
+
+// Beyond the paper: a pose handed out whose pick left the bin unchanged (set_tried) is not handed
+// out again while it stays so: a cell whose gripper cannot take a pipe, or whose pose of it is
+// wrong, would otherwise be sent to the same place frame after frame. Only the same reading
+// again, up to the noise: within kTriedSameOfD D everywhere. A right pose beside a wrong one just
+// over the scorer's bound stays pickable (within 2 D instead, two pipes fewer were taken over 6
+// bins of 7 shapes; docs/experiments.md, "A pick that took nothing").
+void Locator::mark_tried() {
+  const float same_mm = kTriedSameOfD * lm_.tube_d_mm;
+  for (PipeEstimate& e : out_.estimates)
+    for (int k = 0; k < tried_count_; ++k)
+      if (pose_distance_mm(lm_, tried_[k], e.model_to_cam, same_mm) <= same_mm) {
+        e.pickable = e.unresolved = false;
+        e.withheld |= kWithheldTried;
+        break;
+      }
 }
 
 CandidateContext Locator::context(const StartSet& starts, const LocateConfig& cfg, const Frame& f) const {

@@ -83,6 +83,14 @@ class Locator {
 
   // A flag that, once set, ends a cycle as if its deadline had passed (the service's shutdown).
   void set_cancel_flag(const std::atomic<bool>* cancel) { cancel_ = cancel; }
+  // Poses (model -> camera) handed out before whose picks left the bin unchanged there (the
+  // service's TriedPicks): from the next frame on, an estimate within kTriedSameOfD D of one of
+  // them (every check point, the model's symmetries taken into account) is not pickable
+  // (kWithheldTried), so that the next pose, or the second searches, come first. At most
+  // kMaxTried; the first n are kept.
+  static constexpr int kMaxTried = 8;
+  static constexpr float kTriedSameOfD = 0.5f;
+  void set_tried(const Pose* model_to_cam, int n);
 
   const LocateOutput& output() const { return out_; }
   const ZBuffer& zbuffer() const { return zb_; }
@@ -136,6 +144,7 @@ class Locator {
   bool second_searches(const std::atomic<bool>* interrupt);
   void merge_estimate(int c);
   void mark_pipes_read_two_ways();
+  void mark_tried();
   // Candidates of what the accepted poses of candidates [0, n) left of their regions, worked
   // before the deadline (leftover_regions).
   void leftover_candidates(const Frame& f, int n);
@@ -179,6 +188,8 @@ class Locator {
   LocateOutput out_;
   int ridge_capacity_ = 0;
   const std::atomic<bool>* cancel_ = nullptr;
+  Pose tried_[kMaxTried];
+  int tried_count_ = 0;
   double serial_ms_avg_ = 0, candidate_ms_avg_ = 0;  // running averages, for the anytime decisions
 };
 

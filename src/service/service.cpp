@@ -65,6 +65,7 @@ const Pose* Service::presented() const {
 
 void Service::present(int index) {
   index_ = index;
+  handed_out_ = index;
   const Ranked& r = ranked_[std::size_t(index)];
   result_.status = reg::Status::done_ok;
   result_.error = reg::Error::none;
@@ -120,6 +121,11 @@ const reg::Result& Service::run(std::uint16_t command, std::uint16_t req_id, Clo
 
 void Service::locate(Clock::time_point trigger) {
   ++cycles_;
+  // The pose presented last, on the frame it was found in: the robot has been there since.
+  if (cfg_.service.withhold_unchanged_picks && handed_out_ >= 0)
+    tried_.handed_out(ranked_[std::size_t(handed_out_)].model_to_cam, frame_.depth_mm,
+                      frame_.camera.intrinsics, locator_.locator_model());
+  handed_out_ = -1;
   ranked_.clear();
   index_ = -1;
   // The budget counts from when the cycle starts: a LOCATE queued behind another command (REQ_ID
@@ -144,6 +150,9 @@ void Service::locate(Clock::time_point trigger) {
     result_.error =
         grab == GrabStatus::sensor_unavailable ? reg::Error::sensor_unavailable : reg::Error::frame_invalid;
   } else {
+    // Where the robot went and the bin reads as before, that pose is not handed out again.
+    tried_.next_frame(frame_.depth_mm, locator_.locator_model().tube_d_mm);
+    locator_.set_tried(tried_.poses(), tried_.size());
     // The localizer stops taking up candidates a little before the deadline, so that what is
     // in flight and the publishing still fit the budget.
     const auto margin = ms_duration(std::min(5.0, 0.1 * cfg_.service.budget_ms));

@@ -16,6 +16,7 @@
 #include "service/frame_source.hpp"
 #include "service/status_board.hpp"
 #include "service/timing_log.hpp"
+#include "service/tried_picks.hpp"
 
 namespace pipeloc {
 
@@ -87,6 +88,8 @@ class Service {
   Pose robot_from_camera_, grasp_;
   std::vector<Ranked> ranked_;  // pickable poses of the last LOCATE, in the order handed out
   int index_ = -1;
+  int handed_out_ = -1;  // the pose of ranked_ presented last: the one the robot goes to
+  TriedPicks tried_;     // poses whose picks left the bin unchanged (withhold_unchanged_picks)
   bool pick_pending_ = false;
   std::uint32_t cycles_ = 0;
   // The last LOCATE handed out nothing, but found a pose the sensor does not resolve
