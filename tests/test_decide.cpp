@@ -626,9 +626,9 @@ TEST(Decide, APoseNotHandedOutSaysWhy) {
   EXPECT_EQ(why(judged(small)), unsigned(kWithheldCovered | kWithheldUnresolved));
   for (int k = 0; k < kWithheldKinds; ++k) EXPECT_STRNE(withheld_name(k), "?");
   EXPECT_STREQ(withheld_name(0), "ambiguous");
-  EXPECT_STREQ(withheld_label(kWithheldKinds - 1), "TRIED");
+  EXPECT_STREQ(withheld_label(kWithheldKinds - 1), "TOOK NOTHING");
   EXPECT_EQ(withheld_index(kWithheldUnresolved), 6);
-  EXPECT_EQ(withheld_index(kWithheldTried), kWithheldKinds - 1);         // the service's, named last
+  EXPECT_EQ(withheld_index(kWithheldTookNothing), kWithheldKinds - 1);   // the service's, named last
   EXPECT_EQ(withheld_index(kWithheldCovered | kWithheldUnresolved), 1);  // the first check failed
   EXPECT_EQ(withheld_index(0), kWithheldKinds);
 }

@@ -533,7 +533,7 @@ TEST(Service, APoseWhosePickTookNothingIsNotHandedOutAgain) {
     for (int cycle = 1; cycle <= 6; ++cycle) {
       const reg::Result& r = service.run(1, std::uint16_t(cycle), Clock::now());
       last = r.status;
-      tried = service.record().withheld[std::size_t(withheld_index(kWithheldTried))];
+      tried = service.record().withheld[std::size_t(withheld_index(kWithheldTookNothing))];
       if (r.status != reg::Status::done_ok) break;
       pipes_handed_out.push_back(pipe_at(gripper->sim(), *service.presented()));
       EXPECT_GE(pipes_handed_out.back(), 0) << "cycle " << cycle << ": a wrong pose";

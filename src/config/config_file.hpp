@@ -63,7 +63,7 @@ struct ServiceConfig {
   double budget_ms = 250;   // trigger to result; localization stops early to keep it
   int summary_every = 100;  // cycles between summary lines in the timing log
   // A pose handed out whose pick left the bin unchanged there is not handed out again while it
-  // stays so (TriedPicks): the next pose, or DONE_NONE with the pose withheld as `tried`.
+  // stays so (TriedPicks): the next pose, or DONE_NONE with the pose withheld as `took_nothing`.
   bool withhold_unchanged_picks = true;
 };
 

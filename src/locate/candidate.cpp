@@ -209,14 +209,14 @@ const char* outcome_name(CandidateOutcome o) {
 }
 
 const char* withheld_name(int k) {
-  static const char* const names[kWithheldKinds] = {"ambiguous", "covered",       "part_seen", "goes_on",
-                                                    "no_end",    "second_search", "noisy",     "tried"};
+  static const char* const names[kWithheldKinds] = {
+      "ambiguous", "covered", "part_seen", "goes_on", "no_end", "second_search", "noisy", "took_nothing"};
   return k >= 0 && k < kWithheldKinds ? names[k] : "?";
 }
 
 const char* withheld_label(int k) {
   static const char* const labels[kWithheldKinds] = {"AMBIGUOUS", "COVERED", "PART SEEN", "GOES ON",
-                                                     "NO END",    "UNSURE",  "NOISY",     "TRIED"};
+                                                     "NO END",    "UNSURE",  "NOISY",     "TOOK NOTHING"};
   return k >= 0 && k < kWithheldKinds ? labels[k] : "?";
 }
 

@@ -70,7 +70,7 @@ enum Withheld : unsigned {
   kWithheldNoEnd = 1u << 4,         // wholly in view, and no end seen ending
   kWithheldSecondSearch = 1u << 5,  // a second search's pose the image confirms too little
   kWithheldUnresolved = 1u << 6,    // the sensor does not resolve the tube (pick_min_relief_sigmas)
-  kWithheldTried = 1u << 7,         // handed out before, and its pick left the bin unchanged there
+  kWithheldTookNothing = 1u << 7,   // handed out before, and its pick left the bin unchanged there
                                     // (the service's service.withhold_unchanged_picks)
 };
 constexpr int kWithheldKinds = 8;
@@ -83,8 +83,8 @@ constexpr int withheld_index(unsigned bits) {
   return k;
 }
 // The bit's name (`ambiguous`, `covered`, `part_seen`, `goes_on`, `no_end`, `second_search`,
-// `noisy`, `tried`) and the overlay's label for it (AMBIGUOUS, COVERED, PART SEEN, GOES ON, NO END,
-// UNSURE, NOISY, TRIED); k-th bit for k in [0, kWithheldKinds).
+// `noisy`, `took_nothing`) and the overlay's label for it (AMBIGUOUS, COVERED, PART SEEN, GOES ON, NO END,
+// UNSURE, NOISY, TOOK NOTHING); k-th bit for k in [0, kWithheldKinds).
 const char* withheld_name(int k);
 const char* withheld_label(int k);
 

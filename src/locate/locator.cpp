@@ -419,7 +419,7 @@ void Locator::mark_tried() {
     for (int k = 0; k < tried_count_; ++k)
       if (pose_distance_mm(lm_, tried_[k], e.model_to_cam, same_mm) <= same_mm) {
         e.pickable = e.unresolved = false;
-        e.withheld |= kWithheldTried;
+        e.withheld |= kWithheldTookNothing;
         break;
       }
 }

@@ -86,7 +86,7 @@ class Locator {
   // Poses (model -> camera) handed out before whose picks left the bin unchanged there (the
   // service's TriedPicks): from the next frame on, an estimate within kTriedSameOfD D of one of
   // them (every check point, the model's symmetries taken into account) is not pickable
-  // (kWithheldTried), so that the next pose, or the second searches, come first. At most
+  // (kWithheldTookNothing), so that the next pose, or the second searches, come first. At most
   // kMaxTried; the first n are kept.
   static constexpr int kMaxTried = 8;
   static constexpr float kTriedSameOfD = 0.5f;

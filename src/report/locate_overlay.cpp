@@ -56,7 +56,7 @@ void draw_legend(Image<Rgb>* img) {
                            {kOther, " NO END: NO END SEEN ENDING", false},
                            {kOther, " UNSURE: SECOND SEARCH, TOO LITTLE CONFIRMED", false},
                            {kOther, " NOISY: THE SENSOR DOES NOT RESOLVE THE TUBE", false},
-                           {kOther, " TRIED: HANDED OUT, ITS PICK LEFT THE BIN AS IT WAS", false},
+                           {kOther, " TOOK NOTHING: HANDED OUT, THE BIN STAYED AS IT WAS", false},
                            {kCore, "CORE REGION (UPWARD NORMALS)"},
                            {kRegion, "CANDIDATE REGION (GROWN)"},
                            {kAxis, "PRINCIPAL DIRECTION"},

@@ -28,7 +28,7 @@ for r in z["rows"]:
     assert c["locates"] >= c["taken"] + 1 or c["stop"] == "limit", c  # each pipe taken by a pick, then DONE_NONE
     # Why the bins stopped: the last LOCATE's poses not handed out, by check (the timing log's counts).
     assert set(c["stop_withheld"]) <= {"ambiguous", "covered", "part_seen", "goes_on", "no_end", "second_search",
-                                       "noisy", "tried"} and all(n >= 0 for n in c["stop_withheld"].values()), c
+                                       "noisy", "took_nothing"} and all(n >= 0 for n in c["stop_withheld"].values()), c
     assert c["stop_found"] >= 0 and all(n <= c["stop_found"] for n in c["stop_withheld"].values()), c
 PY
 grep -qE ' seen +clear ' "$work/zoo.txt" || fail "no seen/clear columns: $(head -12 "$work/zoo.txt")"
