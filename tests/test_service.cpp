@@ -379,12 +379,28 @@ struct SimService {
   }
 };
 
-double best_error(const SimSource& sim, const Pose& pose) {
-  std::vector<Eigen::Vector3d> v;
-  for (const auto& p : sbend().mesh.vertices) v.push_back(p.cast<double>());
-  double best = 1e9;
-  for (const Pose& gt : sim.pipes_in_camera()) best = std::min(best, mssd(v, pose, gt, {}, 1e9));
+// The pipe of the bin nearest a pose (MSSD) and its error; -1 where none is within bound_mm.
+int nearest_pipe(const SimSource& sim, const Pose& pose, double bound_mm, double* error_mm = nullptr) {
+  static const std::vector<Eigen::Vector3d> v = [] {
+    std::vector<Eigen::Vector3d> out;
+    for (const auto& p : sbend().mesh.vertices) out.push_back(p.cast<double>());
+    return out;
+  }();
+  const std::vector<Pose> pipes = sim.pipes_in_camera();
+  int best = -1;
+  double best_err = bound_mm;
+  for (std::size_t i = 0; i < pipes.size(); ++i) {
+    const double err = mssd(v, pose, pipes[i], {}, best_err);
+    if (err <= best_err) best_err = err, best = int(i);
+  }
+  if (error_mm) *error_mm = best_err;
   return best;
+}
+
+double best_error(const SimSource& sim, const Pose& pose) {
+  double error = 1e9;
+  nearest_pipe(sim, pose, 1e9, &error);
+  return error;
 }
 
 TEST(Service, LocateNextClearAndBadCommand) {
@@ -499,20 +515,6 @@ class GripperTakesNothing : public FrameSource {
   SimSource sim_;
 };
 
-// The pipe of the bin nearest a pose (MSSD), -1 where none is within 10 mm.
-int pipe_at(const SimSource& sim, const Pose& pose) {
-  std::vector<Eigen::Vector3d> v;
-  for (const auto& p : sbend().mesh.vertices) v.push_back(p.cast<double>());
-  const std::vector<Pose> pipes = sim.pipes_in_camera();
-  int best = -1;
-  double best_err = 10.0;
-  for (std::size_t i = 0; i < pipes.size(); ++i) {
-    const double err = mssd(v, pose, pipes[i], {}, best_err);
-    if (err <= best_err) best_err = err, best = int(i);
-  }
-  return best;
-}
-
 // A pose whose pick left the bin as it was is not handed out again while it stays so
 // (service.withhold_unchanged_picks): the robot is sent to each pipe once, then the service answers
 // DONE_NONE and names the poses withheld as tried. Turned off, the same pipes come again and again.
@@ -535,7 +537,7 @@ TEST(Service, APoseWhosePickTookNothingIsNotHandedOutAgain) {
       last = r.status;
       tried = service.record().withheld[std::size_t(withheld_index(kWithheldTookNothing))];
       if (r.status != reg::Status::done_ok) break;
-      pipes_handed_out.push_back(pipe_at(gripper->sim(), *service.presented()));
+      pipes_handed_out.push_back(nearest_pipe(gripper->sim(), *service.presented(), 10.0));
       EXPECT_GE(pipes_handed_out.back(), 0) << "cycle " << cycle << ": a wrong pose";
       service.after_publish();  // the robot goes there and takes nothing
     }
