@@ -800,20 +800,37 @@ TEST(Service, APipeTheSensorDoesNotResolveIsNotHandedOut) {
 
 TEST(Service, TimingLogHasALinePerCycleAndSummaries) {
   SimService s(6);
+  std::vector<reg::Result> results;  // what the PLC read, cycle by cycle
   for (int i = 0; i < 6; ++i) {
-    s.service->run(1, std::uint16_t(i + 1), Clock::now());
+    results.push_back(s.service->run(1, std::uint16_t(i + 1), Clock::now()));
     s.service->search_again();  // as the cycle thread does, after handing out the result
     s.service->log().write(s.service->record());
+    if (i < 5) s.service->after_publish(false);  // the robot takes the pipe (not the last: NEXT follows)
   }
-  s.service->run(2, 7, Clock::now());
+  results.push_back(s.service->run(2, 7, Clock::now()));
   s.service->search_again();  // NEXT: nothing to search
   s.service->log().write(s.service->record());
   std::istringstream in(test::read_text(s.service->log().path()));
   std::string line;
-  int cycles = 0, summaries = 0;
+  int cycles = 0, summaries = 0, poses = 0;
   while (std::getline(in, line)) {
     const nlohmann::json j = nlohmann::json::parse(line);
     if (j["event"] == "cycle") {
+      // The line names the pose the PLC was handed, as its registers hold it (or null).
+      const reg::Result& r = results[std::size_t(cycles)];
+      ASSERT_EQ(j["pose"].is_null(), r.status != reg::Status::done_ok) << line;
+      if (r.status == reg::Status::done_ok) {
+        ++poses;
+        EXPECT_EQ(j["index"], r.index);
+        const char* keys[6] = {"x_mm", "y_mm", "z_mm", "rx_deg", "ry_deg", "rz_deg"};
+        for (int k = 0; k < 3; ++k) {
+          EXPECT_NEAR(j["pose"][keys[k]].get<double>(), r.pose->xyz_mm[std::size_t(k)], 0.01) << keys[k];
+          EXPECT_NEAR(j["pose"][keys[k + 3]].get<double>(), r.pose->rxyz_deg[std::size_t(k)], 0.001)
+              << keys[k + 3];
+        }
+      } else {
+        EXPECT_EQ(j["index"], -1);
+      }
       ++cycles;
       for (const char* key : {"trigger_unix_ms", "frame_age_ms", "grab_ms", "zbuffer_ms", "normals_ms",
                               "regions_ms", "ridge_icp_ms", "locate_ms", "again_ms", "cycle_ms", "candidates",
@@ -831,6 +848,7 @@ TEST(Service, TimingLogHasALinePerCycleAndSummaries) {
     }
   }
   EXPECT_EQ(cycles, 7);
+  EXPECT_GE(poses, 4);      // six pipes, refilled: nearly every LOCATE hands one out
   EXPECT_EQ(summaries, 2);  // every 3 LOCATE cycles
 }
 

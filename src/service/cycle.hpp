@@ -6,6 +6,7 @@
 
 #include "locate/locator.hpp"
 #include "plc/register_map.hpp"
+#include "plc/robot_pose.hpp"
 #include "service/frame_source.hpp"
 
 namespace pipeloc {
@@ -28,6 +29,10 @@ struct CycleRecord {
   // Estimates not pickable, by the checks they fail (Withheld's bits; one may fail several).
   std::array<int, kWithheldKinds> withheld{};
   float score = 0;                              // of the pose presented
+  // The pose presented (DONE_OK only): its rank, and what the PLC reads in the registers.
+  int index = -1;
+  bool has_pose = false;
+  RobotPose pose;
   bool budget_exhausted = false;
   bool cut_by_shutdown = false;  // stopped by SIGTERM/SIGINT/SIGHUP, not by the budget
   std::uint64_t frame_sequence = 0;
