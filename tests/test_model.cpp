@@ -254,6 +254,42 @@ TEST(PipeModel, APipeWithUnequalLegsHasTheNearSymmetryAboutItsBendsMiddle) {
   }
 }
 
+// What an integrator reads at start-up: how far a near twin's surface lies from the pipe's. A
+// tube moved by a known amount spreads by that amount; a bend's twin spreads the more, the more
+// its legs differ; a pipe without a near twin says so.
+TEST(PipeModel, ATwinsSpreadIsHowFarItsSurfaceLiesFromThePipes) {
+  PipeSpec straight;
+  straight.diameter_mm = 16;
+  straight.segments = parse_centreline("S80");
+  const PipeModel tube = derive_pipe_model(make_pipe(straight), "S80");
+  const float spacing = 1.0f;  // the samples' spacing: about one per mm^2
+  EXPECT_LT(surface_spread(tube.surface, Pose::Identity(), spacing).max_mm, 1e-3f);
+  for (const Eigen::Vector3d& shift :
+       {Eigen::Vector3d(0, 3, 0), Eigen::Vector3d(0, 0, 3), Eigen::Vector3d(5, 0, 0)}) {
+    const PipeModel::Spread s = surface_spread(tube.surface, Pose(Eigen::Translation3d(shift)), spacing);
+    EXPECT_NEAR(s.max_mm, shift.norm(), 0.1 * shift.norm() + 0.2) << shift.transpose();
+    EXPECT_LE(s.p95_mm, s.max_mm);
+  }
+  float last = 0;
+  for (const char* path : {"S40,B90r30,S34", "S40,B90r30,S27", "S40,B90r30,S20"}) {
+    PipeSpec spec;
+    spec.diameter_mm = 16;
+    spec.segments = parse_centreline(path);
+    const PipeModel m = derive_pipe_model(make_pipe(spec), path);
+    ASSERT_GE(m.near_symmetries.size(), 1u) << path;
+    ASSERT_EQ(m.near_symmetry_spread.size(), m.near_symmetries.size()) << path;
+    float nearest = INFINITY;  // the twin nearest the pipe: the one its legs' difference makes
+    for (const PipeModel::Spread& s : m.near_symmetry_spread) {
+      EXPECT_LE(s.p95_mm, s.max_mm) << path;
+      nearest = std::min(nearest, s.max_mm);
+    }
+    EXPECT_GT(nearest, last) << path;
+    last = nearest;
+    EXPECT_NE(describe_near_symmetries(m).find("AMBIGUOUS"), std::string::npos);
+  }
+  EXPECT_EQ(describe_near_symmetries(tube), "no near symmetry (no pose has a twin to tell apart)");
+}
+
 TEST(PipeModel, ModelFrameNeedNotBeCentred) {
   PipeSpec spec = pipe_preset("sbend");
   spec.model_frame.translation() = Eigen::Vector3d(300, -200, 50);

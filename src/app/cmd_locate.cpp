@@ -108,6 +108,7 @@ void add_locate(CLI::App& app) {
                     std::to_string(valid_depth_pixels(depth)) + " of " + std::to_string(depth.pixels.size()) +
                     " pixels have a depth; the service answers such a frame with ERROR 2)");
     const PipeModel model = load_pipe_model(model_file);
+    spdlog::info("model: {}", describe_near_symmetries(model));
     Locator locator(model, cfg, sized.intrinsics);
     const LocateOutput& out = locator.locate(depth, sized);
     const int pick = out.pick();

@@ -105,6 +105,7 @@ int serve(const Options& opt) {
           ? fmt::format("; hollow: {} faces of its bore left out (the camera sees the outside)",
                         model.bore_faces_removed)
           : std::string());
+  spdlog::info("model: {}", describe_near_symmetries(model));
   std::unique_ptr<FrameSource> source = open_frame_source(cfg, model);
   spdlog::info("source: {}", source->describe());
   Service service(cfg, model, std::move(source));

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <numeric>
 #include <random>
 #include <unordered_map>
@@ -475,7 +476,51 @@ PipeModel derive_pipe_model(Mesh mesh, const std::string& source, const ModelDer
   model.near_symmetries = find_near_symmetries(
       model.surface, model.centroid, params.near_symmetry_tolerance_of_diameter * model.tube_diameter_mm,
       params.near_symmetry_min_share, model.symmetries, model.tube_diameter_mm, reversal);
+  for (const Pose& m : model.near_symmetries)
+    model.near_symmetry_spread.push_back(surface_spread(model.surface, m, spacing_mm));
   return model;
+}
+
+PipeModel::Spread surface_spread(const SurfaceSamples& surface, const Pose& motion, float spacing_mm) {
+  PipeModel::Spread out;
+  if (surface.points.empty()) return out;
+  KdTree3 tree;
+  tree.build(surface.points.data(), surface.points.size());
+  const std::size_t stride = std::max<std::size_t>(1, surface.points.size() / 4000);
+  std::vector<float> d;
+  for (std::size_t i = 0; i < surface.points.size(); i += stride) {
+    const Eigen::Vector3f q = (motion * surface.points[i].cast<double>()).cast<float>();
+    int idx = 0;
+    float d2 = 0;
+    if (!tree.nearest(q, &idx, &d2)) continue;
+    const std::size_t k = std::size_t(idx);
+    const Eigen::Vector3f off = q - surface.points[k];
+    const float across = surface.normals[k].dot(off);
+    const float along = std::max(0.0f, (off - across * surface.normals[k]).norm() - spacing_mm);
+    d.push_back(std::sqrt(across * across + along * along));
+  }
+  if (d.empty()) return out;
+  std::sort(d.begin(), d.end());
+  out.p95_mm = d[std::size_t(0.95 * double(d.size() - 1))];
+  out.max_mm = d.back();
+  return out;
+}
+
+std::string describe_near_symmetries(const PipeModel& model) {
+  if (model.near_symmetries.empty()) return "no near symmetry (no pose has a twin to tell apart)";
+  const std::size_t n = model.near_symmetries.size();
+  std::string out =
+      std::to_string(n) + (n == 1 ? " near symmetry (a half-turn that swaps its ends): the twin's"
+                                  : " near symmetries (half-turns that swap its ends): each twin's");
+  out += " surface lies within";
+  for (std::size_t k = 0; k < model.near_symmetry_spread.size(); ++k) {
+    char text[96];
+    std::snprintf(text, sizeof text, "%s %.1f mm of the pipe's over 95 %% of it, %.1f mm everywhere",
+                  k ? ";" : "", double(model.near_symmetry_spread[k].p95_mm),
+                  double(model.near_symmetry_spread[k].max_mm));
+    out += text;
+  }
+  return out + ". Where a view does not resolve that, the pose is AMBIGUOUS (not handed out)";
 }
 
 PipeModel load_pipe_model(const std::string& stl_path, const ModelDerivation& params) {

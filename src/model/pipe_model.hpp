@@ -29,6 +29,12 @@ struct PipeModel {
   // Half-turns that map most of the surface onto itself but not all of it (the ends of a pipe
   // swapped): a view of the part that shows only the common surface fits both poses.
   std::vector<Pose> near_symmetries;
+  // For each near symmetry, how far its surface lies from the pipe's: what a camera must resolve
+  // to tell the two apart (an integrator's figure; the localizer judges each view by its pixels).
+  struct Spread {
+    float p95_mm = 0, max_mm = 0;
+  };
+  std::vector<Spread> near_symmetry_spread;
 };
 
 struct ModelDerivation {
@@ -83,5 +89,11 @@ std::vector<Pose> find_symmetries(const SurfaceSamples& surface, const Eigen::Ve
 std::vector<Pose> find_near_symmetries(const SurfaceSamples& surface, const Eigen::Vector3f& centroid,
                                        float tolerance_mm, float min_share, const std::vector<Pose>& exclude,
                                        float exclude_mm, const std::vector<Pose>& starts = {});
+// How far the surface moved by `motion` lies from the surface: its 95th percentile and its
+// largest. Point to plane at the nearest sample, where the two lie within the samples' spacing
+// along the surface (so the spacing does not count), beyond that the distance past it.
+PipeModel::Spread surface_spread(const SurfaceSamples& surface, const Pose& motion, float spacing_mm);
+// One line for the start-up log: the near symmetries and how far each lies from the pipe.
+std::string describe_near_symmetries(const PipeModel& model);
 
 }  // namespace pipeloc
