@@ -120,7 +120,7 @@ int serve(const Options& opt) {
     char model_text[256];
     std::snprintf(model_text, sizeof model_text, "%s: tube diameter D %.1f mm, longest extent L %.1f mm",
                   model.source.c_str(), model.tube_diameter_mm, model.extent_mm);
-    info.model = model_text;
+    info.model = std::string(model_text) + "; " + describe_near_symmetries(model);
     info.source = service.source().describe();
     info.plc = link->describe();
     info.config_path = cfg.path;

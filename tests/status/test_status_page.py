@@ -158,6 +158,8 @@ refresh_s = 2
         self.assertEqual(len(s["history"]["cycle_ms"]), 4)
         self.assertTrue(any(c["address"] == "127.0.0.1" and c["requests"] > 0 for c in s["clients"]), s["clients"])
         self.assertIn('status.port = %d  # TCP port (0: any free one)' % HTTP, s["config"])
+        # The model as the start-up log has it: D, L and its near twins (or none).
+        self.assertRegex(s["model"], r"tube diameter D [0-9.]+ mm, .*near symmetr")
 
     def test_overlay_png(self):
         status, ctype, body = get("/overlay.png")
