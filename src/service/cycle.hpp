@@ -3,6 +3,7 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 
 #include "locate/locator.hpp"
 #include "plc/register_map.hpp"
@@ -31,8 +32,7 @@ struct CycleRecord {
   float score = 0;                              // of the pose presented
   // The pose presented (DONE_OK only): its rank, and what the PLC reads in the registers.
   int index = -1;
-  bool has_pose = false;
-  RobotPose pose;
+  std::optional<RobotPose> pose;
   bool budget_exhausted = false;
   bool cut_by_shutdown = false;  // stopped by SIGTERM/SIGINT/SIGHUP, not by the budget
   std::uint64_t frame_sequence = 0;

@@ -114,8 +114,7 @@ const reg::Result& Service::run(std::uint16_t command, std::uint16_t req_id, Clo
   record_.error = result_.error;
   record_.count = int(ranked_.size());
   record_.score = result_.status == reg::Status::done_ok ? result_.score : 0.0f;
-  record_.has_pose = result_.status == reg::Status::done_ok && result_.pose.has_value();
-  if (record_.has_pose) record_.index = result_.index, record_.pose = *result_.pose;
+  if (result_.status == reg::Status::done_ok) record_.index = result_.index, record_.pose = result_.pose;
   record_.cycle_ms = ms_between(trigger, Clock::now());
   if (command != std::uint16_t(reg::Command::locate)) record_.frame_age_ms = 0;
   return result_;

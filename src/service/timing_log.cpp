@@ -160,8 +160,8 @@ struct WithheldText {
 struct PoseText {
   char text[192] = "null";
   explicit PoseText(const CycleRecord& r) {
-    if (!r.has_pose) return;
-    const RobotPose& p = r.pose;
+    if (!r.pose) return;
+    const RobotPose& p = *r.pose;
     std::snprintf(
         text, sizeof text,
         "{\"x_mm\":%.2f,\"y_mm\":%.2f,\"z_mm\":%.2f,\"rx_deg\":%.3f,\"ry_deg\":%.3f,\"rz_deg\":%.3f}",
