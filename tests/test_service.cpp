@@ -453,6 +453,8 @@ TEST(Service, ASmallBinIsClearedWithoutAWrongPick) {
   }
   EXPECT_EQ(wrong, 0);
   EXPECT_TRUE(sim->pipes_in_camera().empty()) << sim->pipes_in_camera().size() << " of 5 pipes left";
+  // Every pick took its pipe: no frame is kept as one whose pick took nothing.
+  EXPECT_FALSE(std::filesystem::exists(dir.file("log/took-nothing")));
 }
 
 // TriedPicks: the pose handed out last becomes a tried one where the next frame reads as before
@@ -474,28 +476,28 @@ TEST(TriedPicks, APoseIsTriedWhileTheBinReadsAsBeforeThere) {
   TriedPicks tried;
   tried.handed_out(pipe, f.depth_mm, src.intrinsics(), loc.locator_model());
   ASSERT_EQ(grab(), GrabStatus::ok);  // the robot went there, the pipe stayed: fresh noise only
-  tried.next_frame(f.depth_mm, d);
+  EXPECT_TRUE(tried.next_frame(f.depth_mm, d));  // the pick took nothing
   ASSERT_EQ(tried.size(), 1);
   EXPECT_LT((tried.poses()[0].translation() - pipe.translation()).norm(), 1e-9);
   ASSERT_EQ(grab(), GrabStatus::ok);
-  tried.next_frame(f.depth_mm, d);
+  EXPECT_FALSE(tried.next_frame(f.depth_mm, d));  // no pick since
   EXPECT_EQ(tried.size(), 1);  // still as it was
   // Never more than the locator takes: the oldest goes.
   for (int i = 0; i < Locator::kMaxTried + 2; ++i) {
     tried.handed_out(pipe, f.depth_mm, src.intrinsics(), loc.locator_model());
-    tried.next_frame(f.depth_mm, d);
+    EXPECT_TRUE(tried.next_frame(f.depth_mm, d));
   }
   EXPECT_EQ(tried.size(), Locator::kMaxTried);
   tried.clear();
   tried.handed_out(pipe, f.depth_mm, src.intrinsics(), loc.locator_model());
-  tried.next_frame(f.depth_mm, d);
+  EXPECT_TRUE(tried.next_frame(f.depth_mm, d));
   ASSERT_EQ(tried.size(), 1);
   // Handed out again and taken this time: the pick changed the bin there, so neither is tried.
   tried.handed_out(pipe, f.depth_mm, src.intrinsics(), loc.locator_model());
   src.picked(pipe);
   ASSERT_TRUE(src.pipes_in_camera().empty());
   ASSERT_EQ(grab(), GrabStatus::ok);
-  tried.next_frame(f.depth_mm, d);
+  EXPECT_FALSE(tried.next_frame(f.depth_mm, d));  // the pick took its pipe
   EXPECT_EQ(tried.size(), 0);
 }
 
@@ -554,6 +556,84 @@ TEST(Service, APoseWhosePickTookNothingIsNotHandedOutAgain) {
       EXPECT_EQ(pipes_handed_out.size(), 6u);
       EXPECT_EQ(tried, 0);
     }
+  }
+}
+
+// A pick that took nothing keeps, for the maintainer, the frame its pose was found in, the pose
+// as handed out and a picture of it (log.took_nothing_frames, the last N), and the next LOCATE's
+// log line says so.
+TEST(Service, APickThatTookNothingKeepsTheFrameItWasFoundIn) {
+  test::TempDir dir;
+  AppConfig cfg = test::sim_config(dir, 3, 21);
+  cfg.source.sim.refill = false;
+  cfg.service.budget_ms = 20000;
+  cfg.log.took_nothing_frames = 2;
+  Service service(cfg, sbend(), std::make_unique<GripperTakesNothing>(sbend(), cfg.source.sim));
+  struct Pick {
+    std::uint32_t cycle;
+    Pose pose;
+    std::vector<float> depth;
+  };
+  std::vector<Pick> picks;
+  bool picked_before = false;
+  for (int cycle = 1; cycle <= 6; ++cycle) {
+    const reg::Result& r = service.run(1, std::uint16_t(cycle), Clock::now());
+    EXPECT_EQ(service.record().last_pick_took_nothing, picked_before) << "cycle " << cycle;
+    picked_before = r.status == reg::Status::done_ok;
+    if (picked_before)
+      picks.push_back(
+          {std::uint32_t(service.record().cycle), *service.presented(), service.frame().depth_mm.pixels});
+    service.after_publish();  // the robot goes there and takes nothing
+    if (!picked_before) break;
+  }
+  ASSERT_GE(picks.size(), 1u);
+  ASSERT_FALSE(picked_before) << "the service should stop handing out the poses it tried";
+  const auto ends_with = [](const std::string& f, const std::string& end) {
+    return f.size() >= end.size() && f.compare(f.size() - end.size(), end.size(), end) == 0;
+  };
+  std::vector<std::string> files;
+  for (const auto& entry : std::filesystem::directory_iterator(dir.file("log/took-nothing")))
+    files.push_back(entry.path().string());
+  std::sort(files.begin(), files.end());
+  const std::size_t kept = std::min<std::size_t>(picks.size(), 2);
+  ASSERT_EQ(files.size(), 4 * kept);  // depth, camera, pick, overlay each
+  for (std::size_t k = 0; k < kept; ++k) {
+    const Pick& p = picks[picks.size() - kept + k];
+    SCOPED_TRACE("the pick of cycle " + std::to_string(p.cycle));
+    std::string depth, camera, pick, overlay;
+    for (const std::string& f : files)
+      if (f.find("cycle" + std::string(8 - std::to_string(p.cycle).size(), '0') + std::to_string(p.cycle)) !=
+          std::string::npos)
+        (ends_with(f, "-depth.png")     ? depth
+         : ends_with(f, "-camera.json") ? camera
+         : ends_with(f, "-pick.json")   ? pick
+                                        : overlay) = f;
+    ASSERT_FALSE(depth.empty());
+    ASSERT_FALSE(camera.empty());
+    ASSERT_FALSE(pick.empty());
+    ASSERT_TRUE(ends_with(overlay, "-overlay.png"));
+    // The frame the pose was found in, exactly; the pose as handed out.
+    CameraInfo cam = read_scene_camera(camera).at(0);
+    const Image<float> back = read_depth_for_camera(depth, camera, 0, &cam);
+    ASSERT_EQ(back.pixels.size(), p.depth.size());
+    double worst = 0;
+    for (std::size_t i = 0; i < back.pixels.size(); ++i)
+      worst = std::max(worst, double(std::abs(back.pixels[i] - p.depth[i])));
+    EXPECT_EQ(worst, 0.0);
+    std::ifstream in(pick);
+    const nlohmann::json j = nlohmann::json::parse(in);
+    EXPECT_EQ(j.at("cycle").get<std::uint32_t>(), p.cycle);
+    EXPECT_EQ(j.at("found_unchanged_by_cycle").get<std::uint32_t>(), p.cycle + 1);
+    const std::vector<double> m = j.at("model_to_cam_rowmajor_mm").get<std::vector<double>>();
+    ASSERT_EQ(m.size(), 16u);
+    for (int r = 0; r < 4; ++r)
+      for (int c = 0; c < 4; ++c) EXPECT_NEAR(m[std::size_t(4 * r + c)], p.pose.matrix()(r, c), 1e-9);
+    // The picture is a PNG of the frame's size.
+    std::ifstream png(overlay, std::ios::binary);
+    unsigned char head[24] = {};
+    png.read(reinterpret_cast<char*>(head), sizeof head);
+    EXPECT_EQ(std::string(reinterpret_cast<char*>(head + 1), 3), "PNG");
+    EXPECT_EQ((head[16] << 24) | (head[17] << 16) | (head[18] << 8) | head[19], back.width);
   }
 }
 
@@ -831,6 +911,7 @@ TEST(Service, TimingLogHasALinePerCycleAndSummaries) {
       } else {
         EXPECT_EQ(j["index"], -1);
       }
+      EXPECT_EQ(j["last_pick_took_nothing"], false) << line;  // the sim source took every pipe handed out
       ++cycles;
       for (const char* key : {"trigger_unix_ms", "frame_age_ms", "grab_ms", "zbuffer_ms", "normals_ms",
                               "regions_ms", "ridge_icp_ms", "locate_ms", "again_ms", "cycle_ms", "candidates",

@@ -474,6 +474,7 @@ void read_all(const std::string& file, const toml::table& root, AppConfig* cfg) 
   log.integer("keep_files", &cfg->log.keep_files, 1, 1000, "files");
   log.integer("overlay_every", &cfg->log.overlay_every, 0, 1000000, "LOCATE cycles (0 = never)");
   log.integer("no_pick_frames", &cfg->log.no_pick_frames, 0, 1000, "frames kept (0 = none)");
+  log.integer("took_nothing_frames", &cfg->log.took_nothing_frames, 0, 1000, "frames kept (0 = none)");
   log.finish();
 
   Section status(file, "status", table("status"), eff);

@@ -93,6 +93,7 @@ struct LogConfig {
   int keep_files = 5;               // rotated files kept (timing.jsonl.1 .. .N)
   int overlay_every = 0;            // every N-th LOCATE: overlay-latest.png in dir (0 = never)
   int no_pick_frames = 10;          // the last N LOCATEs handing out no pose kept in dir/no-pick (0 = none)
+  int took_nothing_frames = 10;     // the last N picks that took nothing kept in dir/took-nothing (0 = none)
 };
 
 // The status page and /metrics (src/status): off unless enabled; served on a thread of its own.

@@ -98,14 +98,47 @@ void draw_view_edges(Image<Rgb>* img, const PixelBox& view) {
   if (view.y1 < img->height - 1) dashed(view.x0, view.y1, view.x1, view.y1);
 }
 
-}  // namespace
-
-Image<Rgb> draw_locate_overlay(const Locator& loc, const Image<float>& depth, const CameraInfo& cam) {
+// The depth shaded and greyed down, so what is drawn on it stands out.
+Image<Rgb> grey_depth(const Image<float>& depth) {
   Image<Rgb> img = shade_depth(depth);
-  for (auto& p : img.pixels) {  // grey it down so the findings stand out
+  for (auto& p : img.pixels) {
     const std::uint8_t g = std::uint8_t((p.r + p.g + p.b) / 3 * 0.7);
     p = {g, g, g};
   }
+  return img;
+}
+
+// Depth in grey, near bright and far dark between its 2nd and 98th percentile; no reading black.
+Image<Rgb> grey_relief(const Image<float>& depth) {
+  std::vector<float> valid;
+  for (float z : depth.pixels)
+    if (z > 0) valid.push_back(z);
+  Image<Rgb> img(depth.width, depth.height, Rgb{0, 0, 0});
+  if (valid.empty()) return img;
+  const auto at = [&](double q) {
+    auto k = valid.begin() + std::ptrdiff_t(q * double(valid.size() - 1));
+    std::nth_element(valid.begin(), k, valid.end());
+    return *k;
+  };
+  const float near = at(0.02), far = at(0.98), span = std::max(far - near, 1e-3f);
+  for (std::size_t i = 0; i < depth.pixels.size(); ++i) {
+    const float z = depth.pixels[i];
+    if (!(z > 0)) continue;
+    const auto g = std::uint8_t(235 - 195 * std::clamp((z - near) / span, 0.0f, 1.0f));
+    img.pixels[i] = {g, g, g};
+  }
+  return img;
+}
+
+void draw_cross(Image<Rgb>* img, const Eigen::Vector2d& c, Rgb color) {
+  draw_line(img, c.x() - 8, c.y() - 8, c.x() + 8, c.y() + 8, color, 3);
+  draw_line(img, c.x() - 8, c.y() + 8, c.x() + 8, c.y() - 8, color, 3);
+}
+
+}  // namespace
+
+Image<Rgb> draw_locate_overlay(const Locator& loc, const Image<float>& depth, const CameraInfo& cam) {
+  Image<Rgb> img = grey_depth(depth);
   const Pose bin_to_cam = bin_to_camera(cam);
   const ZBuffer& zb = loc.zbuffer();
   const RegionBuffers& rb = loc.regions();
@@ -173,9 +206,7 @@ Image<Rgb> draw_locate_overlay(const Locator& loc, const Image<float>& depth, co
   }
   if (pick >= 0) {
     const Pose& p = out.estimates[std::size_t(pick)].model_to_cam;
-    const Eigen::Vector2d c = cam.intrinsics.project(p * loc.locator_model().centroid.cast<double>());
-    draw_line(&img, c.x() - 8, c.y() - 8, c.x() + 8, c.y() + 8, kPick, 3);
-    draw_line(&img, c.x() - 8, c.y() + 8, c.x() + 8, c.y() - 8, kPick, 3);
+    draw_cross(&img, cam.intrinsics.project(p * loc.locator_model().centroid.cast<double>()), kPick);
   }
   // Beside each pose: rank (0 = best, as the PLC's INDEX), score, pickable or not.
   for (int i = int(out.estimates.size()) - 1; i >= 0; --i) {
@@ -195,6 +226,51 @@ Image<Rgb> draw_locate_overlay(const Locator& loc, const Image<float>& depth, co
   }
   draw_view_edges(&img, out.view);
   draw_legend(&img);
+  return img;
+}
+
+Image<Rgb> draw_pose_overlay(const Image<float>& depth, const CameraInfo& cam, const LocatorModel& lm,
+                             const Pose& model_to_cam, const std::string& caption) {
+  Image<Rgb> img = grey_depth(depth);
+  Image<float> scratch(depth.width, depth.height, 0.0f);
+  ProjectedMesh projected;
+  projected.reserve(lm.model->mesh);
+  const PixelBox box =
+      render_depth_in_box(lm.model->mesh, model_to_cam, cam.intrinsics, &scratch, &projected);
+  draw_outline(&img, lm.model->mesh, model_to_cam, cam.intrinsics, kPick, 3, &scratch, &projected);
+  draw_cross(&img, cam.intrinsics.project(model_to_cam * lm.centroid.cast<double>()), kPick);
+  draw_label(&img, 6, 6, caption, kPick);
+  draw_label(&img, 6, 22, "RED: THE POSE AND ITS CENTRE", kPick);
+  if (box.empty()) return img;
+  // An inset at the bottom right: the pose's surroundings, near bright and far dark over their
+  // own depths, enlarged, so a small or far pipe shows against what lies around it.
+  const int margin = std::max(8, (box.x1 - box.x0 + box.y1 - box.y0) / 2);
+  const int x0 = std::max(0, box.x0 - margin), y0 = std::max(0, box.y0 - margin);
+  const int x1 = std::min(depth.width - 1, box.x1 + margin), y1 = std::min(depth.height - 1, box.y1 + margin);
+  const int w = x1 - x0 + 1, h = y1 - y0 + 1;
+  const int scale = std::clamp(std::min(depth.width / 3 / w, depth.height / 3 / h), 1, 8);
+  Image<float> around(w, h, 0.0f);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) around.at(x, y) = depth.at(x0 + x, y0 + y);
+  const Image<Rgb> local = grey_relief(around);
+  const int ox = depth.width - w * scale - 6, oy = depth.height - h * scale - 6;
+  if (ox < 0 || oy < 30) return img;  // the pose fills the view: the frame itself shows it
+  for (int y = -1; y <= h * scale; ++y)
+    for (int x = -1; x <= w * scale; ++x) {
+      Rgb c = kPick;  // the inset's frame
+      if (x >= 0 && y >= 0 && x < w * scale && y < h * scale) {
+        const int sx = x / scale, sy = y / scale, fx = x0 + sx, fy = y0 + sy;
+        const bool in = scratch.at(fx, fy) > 0;
+        const bool edge = in && (fx == 0 || fy == 0 || fx == depth.width - 1 || fy == depth.height - 1 ||
+                                 scratch.at(fx - 1, fy) <= 0 || scratch.at(fx + 1, fy) <= 0 ||
+                                 scratch.at(fx, fy - 1) <= 0 || scratch.at(fx, fy + 1) <= 0);
+        c = edge ? kPick : local.at(sx, sy);
+      }
+      if (img.inside(ox + x, oy + y)) img.at(ox + x, oy + y) = c;
+    }
+  char zoom[32];
+  std::snprintf(zoom, sizeof zoom, "AROUND THE POSE X%d, NEAR BRIGHT", scale);
+  draw_label(&img, std::min(ox, depth.width - 8 * int(std::strlen(zoom)) - 8), oy - 16, zoom, kPick);
   return img;
 }
 

@@ -33,6 +33,8 @@ struct CycleRecord {
   // The pose presented (DONE_OK only): its rank, and what the PLC reads in the registers.
   int index = -1;
   std::optional<RobotPose> pose;
+  // The pose presented before this LOCATE took nothing: where it lay, the bin reads as before.
+  bool last_pick_took_nothing = false;
   bool budget_exhausted = false;
   bool cut_by_shutdown = false;  // stopped by SIGTERM/SIGINT/SIGHUP, not by the budget
   std::uint64_t frame_sequence = 0;

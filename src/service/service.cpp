@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <initializer_list>
 #include <string>
 #include <vector>
 
@@ -55,6 +56,7 @@ Service::Service(const AppConfig& cfg, const PipeModel& model, std::unique_ptr<F
   const Intrinsics& k = source_->intrinsics();
   frame_.depth_mm.resize(k.width, k.height, 0.0f);
   frame_.camera.intrinsics = k;
+  if (cfg.log.took_nothing_frames > 0) held_pick_.frame = frame_;
   ranked_.reserve(std::size_t(cfg.locate.result_cap()));
 }
 
@@ -123,7 +125,8 @@ const reg::Result& Service::run(std::uint16_t command, std::uint16_t req_id, Clo
 void Service::locate(Clock::time_point trigger) {
   ++cycles_;
   // The pose presented last, on the frame it was found in: the robot has been there since.
-  if (cfg_.service.withhold_unchanged_picks && handed_out_ >= 0)
+  const bool judge_picks = cfg_.service.withhold_unchanged_picks || cfg_.log.took_nothing_frames > 0;
+  if (judge_picks && handed_out_ >= 0)
     tried_.handed_out(ranked_[std::size_t(handed_out_)].model_to_cam, frame_.depth_mm,
                       frame_.camera.intrinsics, locator_.locator_model());
   handed_out_ = -1;
@@ -152,8 +155,9 @@ void Service::locate(Clock::time_point trigger) {
         grab == GrabStatus::sensor_unavailable ? reg::Error::sensor_unavailable : reg::Error::frame_invalid;
   } else {
     // Where the robot went and the bin reads as before, that pose is not handed out again.
-    tried_.next_frame(frame_.depth_mm, locator_.locator_model().tube_d_mm);
-    locator_.set_tried(tried_.poses(), tried_.size());
+    record_.last_pick_took_nothing = tried_.next_frame(frame_.depth_mm, locator_.locator_model().tube_d_mm);
+    held_pick_.took_nothing = record_.last_pick_took_nothing && held_pick_.held;
+    locator_.set_tried(tried_.poses(), cfg_.service.withhold_unchanged_picks ? tried_.size() : 0);
     // The localizer stops taking up candidates a little before the deadline, so that what is
     // in flight and the publishing still fit the budget.
     const auto margin = ms_duration(std::min(5.0, 0.1 * cfg_.service.budget_ms));
@@ -277,45 +281,117 @@ void Service::write_overlays() {
   }
 }
 
-// The maintainer's record of why the cell stood still: the last log.no_pick_frames LOCATEs that
-// handed out no pose keep their depth frame and camera (located again with `pipeloc locate
-// --depth F-depth.png --camera F-camera.json`) and the overlay, in log.dir/no-pick/. Names start
-// with the UTC time, so they sort oldest first; older ones are removed.
-void Service::keep_no_pick_frame(const Image<Rgb>& overlay) {
+namespace {
+
+// The maintainer's kept frames (no-pick/, took-nothing/): a frame's files are named by its folder,
+// the UTC time and the LOCATE cycle, so they sort oldest first, and share the part after the base.
+// Writes the depth and the camera (located again with `pipeloc locate --depth F-depth.png --camera
+// F-camera.json`); returns the base for the other parts.
+std::string keep_frame(const std::filesystem::path& dir, std::uint32_t cycle, const Frame& frame) {
+  std::filesystem::create_directories(dir);
+  char name[24];
+  std::snprintf(name, sizeof name, "-cycle%08u", cycle);
+  const std::string base = (dir / (utc_text(unix_ms_now(), "%Y%m%d-%H%M%S") + name)).string();
+  write_depth_png(base + "-depth.png", to_raw_depth(frame.depth_mm, frame.camera.depth_scale));
+  write_json(base + "-camera.json", Json{{"0", camera_to_json(frame.camera)}});
+  return base;
+}
+
+// Removes the oldest frames' parts beyond the newest `keep`.
+void keep_newest(const std::filesystem::path& dir, int keep, std::initializer_list<const char*> parts) {
   namespace fs = std::filesystem;
-  try {
-    const fs::path dir = fs::path(cfg_.log.dir) / "no-pick";
-    fs::create_directories(dir);
-    char cycle[24];
-    std::snprintf(cycle, sizeof cycle, "-cycle%08u", cycles_);
-    const std::string base = (dir / (utc_text(unix_ms_now(), "%Y%m%d-%H%M%S") + cycle)).string();
-    write_depth_png(base + "-depth.png", to_raw_depth(frame_.depth_mm, frame_.camera.depth_scale));
-    write_json(base + "-camera.json", Json{{"0", camera_to_json(frame_.camera)}});
-    write_rgb_png(base + "-overlay.png", overlay);
-    const std::string suffix = "-depth.png";
-    std::vector<std::string> kept;
-    for (const auto& entry : fs::directory_iterator(dir)) {
-      const std::string name = entry.path().filename().string();
-      if (name.size() > suffix.size() &&
-          name.compare(name.size() - suffix.size(), suffix.size(), suffix) == 0)
-        kept.push_back(name.substr(0, name.size() - suffix.size()));
+  const std::string suffix = "-depth.png";
+  std::vector<std::string> kept;
+  for (const auto& entry : fs::directory_iterator(dir)) {
+    const std::string name = entry.path().filename().string();
+    if (name.size() > suffix.size() && name.compare(name.size() - suffix.size(), suffix.size(), suffix) == 0)
+      kept.push_back(name.substr(0, name.size() - suffix.size()));
+  }
+  std::sort(kept.begin(), kept.end());
+  for (std::size_t k = 0; k + std::size_t(keep) < kept.size(); ++k)
+    for (const char* part : parts) {
+      std::error_code ec;  // a file already gone is no error
+      fs::remove(dir / (kept[k] + part), ec);
     }
-    std::sort(kept.begin(), kept.end());
-    for (std::size_t k = 0; k + std::size_t(cfg_.log.no_pick_frames) < kept.size(); ++k)
-      for (const char* part : {"-depth.png", "-camera.json", "-overlay.png"}) {
-        std::error_code ec;  // a file already gone is no error
-        fs::remove(dir / (kept[k] + part), ec);
-      }
+}
+
+}  // namespace
+
+// The maintainer's record of why the cell stood still: the last log.no_pick_frames LOCATEs that
+// handed out no pose keep their depth frame, camera and overlay in log.dir/no-pick/.
+void Service::keep_no_pick_frame(const Image<Rgb>& overlay) {
+  try {
+    const std::filesystem::path dir = std::filesystem::path(cfg_.log.dir) / "no-pick";
+    const std::string base = keep_frame(dir, cycles_, frame_);
+    write_rgb_png(base + "-overlay.png", overlay);
+    keep_newest(dir, cfg_.log.no_pick_frames, {"-depth.png", "-camera.json", "-overlay.png"});
   } catch (const std::exception& e) {
     spdlog::warn("no-pick frame: {}", e.what());
+  }
+}
+
+// The pose presented and the frame it was found in, while the robot picks it (a NEXT on the same
+// frame replaces the pose only). A copy into buffers sized at start-up, after the result is out.
+void Service::hold_pick() {
+  if (cfg_.log.took_nothing_frames <= 0 || index_ < 0) return;
+  if (!held_pick_.held || held_pick_.cycle != cycles_) held_pick_.frame = frame_;
+  held_pick_.pose = ranked_[std::size_t(index_)];
+  held_pick_.cycle = cycles_;
+  held_pick_.index = index_;
+  held_pick_.held = true;
+}
+
+// The maintainer's record of a pick that took nothing (the robot went there and the bin reads as
+// before: a wrong pose, or a gripper that cannot hold the pipe there): the frame the pose was found
+// in, the pose as handed out (`-pick.json`: cycle, INDEX, score, model -> camera, the registers'
+// pose) and a picture of it, in log.dir/took-nothing/; the last log.took_nothing_frames are kept.
+void Service::keep_took_nothing_frame() {
+  held_pick_.took_nothing = false;
+  held_pick_.held = false;
+  const HeldPick& h = held_pick_;
+  const std::filesystem::path dir = std::filesystem::path(cfg_.log.dir) / "took-nothing";
+  spdlog::warn(
+      "LOCATE {}: the pick of LOCATE {} (INDEX {}) took nothing: the bin reads as before where its pose "
+      "lies; its frame is kept in {}",
+      cycles_, h.cycle, h.index, dir.string());
+  try {
+    const std::string base = keep_frame(dir, h.cycle, h.frame);
+    Json matrix = Json::array();
+    const Eigen::Matrix4d m = h.pose.model_to_cam.matrix();
+    for (int r = 0; r < 4; ++r)
+      for (int c = 0; c < 4; ++c) matrix.push_back(m(r, c));
+    const RobotPose& p = h.pose.robot;
+    write_json(base + "-pick.json", Json{{"cycle", h.cycle},
+                                         {"found_unchanged_by_cycle", cycles_},
+                                         {"index", h.index},
+                                         {"score", h.pose.score},
+                                         {"model_to_cam_rowmajor_mm", matrix},
+                                         {"robot",
+                                          {{"x_mm", p.xyz_mm[0]},
+                                           {"y_mm", p.xyz_mm[1]},
+                                           {"z_mm", p.xyz_mm[2]},
+                                           {"rx_deg", p.rxyz_deg[0]},
+                                           {"ry_deg", p.rxyz_deg[1]},
+                                           {"rz_deg", p.rxyz_deg[2]}}}});
+    char caption[96];
+    std::snprintf(caption, sizeof caption, "LOCATE %u INDEX %d: THE PICK TOOK NOTHING", h.cycle, h.index);
+    write_rgb_png(base + "-overlay.png",
+                  draw_pose_overlay(h.frame.depth_mm, h.frame.camera, locator_.locator_model(),
+                                    h.pose.model_to_cam, caption));
+    keep_newest(dir, cfg_.log.took_nothing_frames,
+                {"-depth.png", "-camera.json", "-pick.json", "-overlay.png"});
+  } catch (const std::exception& e) {
+    spdlog::warn("took-nothing frame: {}", e.what());
   }
 }
 
 void Service::after_publish(bool shutting_down) {
   warn_unresolved();
   write_overlays();
+  if (held_pick_.took_nothing) keep_took_nothing_frame();
   if (!pick_pending_ || shutting_down) return;
   pick_pending_ = false;
+  hold_pick();
   if (const Pose* p = presented()) source_->picked(*p);
 }
 

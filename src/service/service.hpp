@@ -46,8 +46,9 @@ class Service {
   void publish_status();
   // After the result is published (outside the cycle): every log.overlay_every LOCATEs the
   // integrator's picture of the frame is written, every status.overlay_every LOCATEs it goes to
-  // the status board, a LOCATE that handed out no pose keeps its frame (log.no_pick_frames), and
-  // the simulated bin loses the pipe handed out. Shutting down, the records are still written (the
+  // the status board, a LOCATE that handed out no pose keeps its frame (log.no_pick_frames), a
+  // pick that took nothing keeps the frame it was found in (log.took_nothing_frames), and the
+  // simulated bin loses the pipe handed out. Shutting down, the records are still written (the
   // last LOCATE before a stop is often the one that stood still) but the bin stays as it is.
   void after_publish(bool shutting_down = false);
   // Stops a running cycle at its next check (shutdown).
@@ -77,6 +78,8 @@ class Service {
   void present(int index);
   void write_overlays();
   void keep_no_pick_frame(const Image<Rgb>& overlay);
+  void hold_pick();
+  void keep_took_nothing_frame();
   void note_unresolved(const LocateOutput& out);
   void warn_unresolved();
 
@@ -90,6 +93,17 @@ class Service {
   int index_ = -1;
   int handed_out_ = -1;  // the pose of ranked_ presented last: the one the robot goes to
   TriedPicks tried_;     // poses whose picks left the bin unchanged (withhold_unchanged_picks)
+  // The pose presented last and the frame it was found in, while the robot picks it; kept in
+  // log.dir/took-nothing where the next LOCATE finds the bin there as it was.
+  struct HeldPick {
+    Frame frame;
+    Ranked pose;
+    std::uint32_t cycle = 0;
+    int index = -1;
+    bool held = false;
+    bool took_nothing = false;  // found so by the LOCATE running now: kept after its result
+  };
+  HeldPick held_pick_;
   bool pick_pending_ = false;
   std::uint32_t cycles_ = 0;
   // The last LOCATE handed out nothing, but found a pose the sensor does not resolve

@@ -181,14 +181,16 @@ void TimingLog::write(const CycleRecord& r) {
       "\"locate_ms\":%.2f,\"again_ms\":%.2f,\"cycle_ms\":%.2f,\"budget_ms\":%.1f,\"budget_use\":%.3f,"
       "\"budget_exhausted\":%s,"
       "\"candidates\":%d,\"tried\":%d,\"accepted\":%d,\"count\":%d,\"unresolved\":%d,\"score\":%.4f,"
-      "\"index\":%d,\"pose\":%s,\"status\":\"%s\",\"error\":\"%s\",\"withheld\":{%s}}\n",
+      "\"index\":%d,\"pose\":%s,\"last_pick_took_nothing\":%s,\"status\":\"%s\",\"error\":\"%s\","
+      "\"withheld\":{%s}}\n",
       (unsigned long long)r.cycle, unsigned(r.command), unsigned(r.req_id), r.trigger_unix_ms,
       (unsigned long long)r.frame_sequence, r.queued_ms, grab_status_name(r.grab), r.frame_check, r.grab_ms,
       r.frame_age_ms, t.zbuffer_ms, t.normals_ms, t.regions_ms, t.axis_ms, t.ridge_icp_ms, t.refine_ms,
       t.verify_ms, t.total_ms - t.again_ms, t.again_ms, r.cycle_ms, r.budget_ms,
       r.budget_ms > 0 ? r.cycle_ms / r.budget_ms : 0.0, r.budget_exhausted ? "true" : "false", r.candidates,
       r.tried, r.accepted, r.count, r.unresolved, double(r.score), r.index, PoseText(r).text,
-      status_name(r.status), r.cut_by_shutdown ? "shutdown" : error_name(r.error), WithheldText(r).text);
+      r.last_pick_took_nothing ? "true" : "false", status_name(r.status),
+      r.cut_by_shutdown ? "shutdown" : error_name(r.error), WithheldText(r).text);
   put(line_, n);
   if (r.command != std::uint16_t(reg::Command::locate)) return;
   window_.push_back(r.cycle_ms);

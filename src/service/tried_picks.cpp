@@ -40,7 +40,7 @@ bool TriedPicks::unchanged(const Footprint& f, const Image<float>& depth_mm, flo
   return same >= kUnchangedShare * f.n;
 }
 
-void TriedPicks::next_frame(const Image<float>& depth_mm, float tube_d_mm) {
+bool TriedPicks::next_frame(const Image<float>& depth_mm, float tube_d_mm) {
   int kept = 0;
   for (int i = 0; i < count_; ++i)
     if (unchanged(footprints_[std::size_t(i)], depth_mm, tube_d_mm)) {
@@ -49,7 +49,8 @@ void TriedPicks::next_frame(const Image<float>& depth_mm, float tube_d_mm) {
       ++kept;
     }
   count_ = kept;
-  if (has_last_ && unchanged(last_footprint_, depth_mm, tube_d_mm)) {
+  const bool took_nothing = has_last_ && unchanged(last_footprint_, depth_mm, tube_d_mm);
+  if (took_nothing) {
     if (count_ == Locator::kMaxTried) {  // the oldest goes
       std::move(poses_.begin() + 1, poses_.end(), poses_.begin());
       std::move(footprints_.begin() + 1, footprints_.end(), footprints_.begin());
@@ -60,6 +61,7 @@ void TriedPicks::next_frame(const Image<float>& depth_mm, float tube_d_mm) {
     ++count_;
   }
   has_last_ = false;
+  return took_nothing;
 }
 
 }  // namespace pipeloc

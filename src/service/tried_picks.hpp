@@ -30,8 +30,9 @@ class TriedPicks {
   // A new frame: the pose handed out last becomes a tried one where its footprint reads as before
   // (within D/2 on at least kUnchangedShare of its pixels: a pipe taken away changes the depth
   // there by at least its diameter); a tried pose whose footprint changed is forgotten (the pipe
-  // moved or is gone). The oldest is forgotten when Locator::kMaxTried are remembered.
-  void next_frame(const Image<float>& depth_mm, float tube_d_mm);
+  // moved or is gone). The oldest is forgotten when Locator::kMaxTried are remembered. True when
+  // the pose handed out last became a tried one: its pick took nothing.
+  bool next_frame(const Image<float>& depth_mm, float tube_d_mm);
   void clear() { has_last_ = false, count_ = 0; }
 
   const Pose* poses() const { return poses_.data(); }
