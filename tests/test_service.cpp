@@ -569,6 +569,8 @@ TEST(Service, APickThatTookNothingKeepsTheFrameItWasFoundIn) {
   cfg.service.budget_ms = 20000;
   cfg.log.took_nothing_frames = 2;
   Service service(cfg, sbend(), std::make_unique<GripperTakesNothing>(sbend(), cfg.source.sim));
+  StatusBoard board;
+  service.set_status_board(&board);
   struct Pick {
     std::uint32_t cycle;
     Pose pose;
@@ -583,10 +585,15 @@ TEST(Service, APickThatTookNothingKeepsTheFrameItWasFoundIn) {
     if (picked_before)
       picks.push_back(
           {std::uint32_t(service.record().cycle), *service.presented(), service.frame().depth_mm.pixels});
+    service.publish_status();
     service.after_publish();  // the robot goes there and takes nothing
     if (!picked_before) break;
   }
   ASSERT_GE(picks.size(), 1u);
+  StatusSnapshot snap;
+  board.snapshot(&snap);
+  EXPECT_EQ(snap.picks, picks.size());
+  EXPECT_EQ(snap.picks_took_nothing, picks.size());  // the status page's and /metrics' count
   ASSERT_FALSE(picked_before) << "the service should stop handing out the poses it tried";
   const auto ends_with = [](const std::string& f, const std::string& end) {
     return f.size() >= end.size() && f.compare(f.size() - end.size(), end.size(), end) == 0;

@@ -41,6 +41,7 @@ void StatusBoard::publish_command(const CycleRecord& record, int index, const St
   ++s.commands_by_type[command_slot(record.command)];
   if (std::size_t(record.error) < std::size(s.errors_by_code)) ++s.errors_by_code[std::size_t(record.error)];
   if (record.status == reg::Status::done_ok) ++s.picks;
+  s.picks_took_nothing += record.last_pick_took_nothing;
   s.recent[s.recent_next] = row;
   s.recent_next = (s.recent_next + 1) % StatusSnapshot::kRecent;
   s.recent_count = std::min(s.recent_count + 1, StatusSnapshot::kRecent);

@@ -57,6 +57,7 @@ struct StatusSnapshot {
   std::uint64_t locate_by_status[5] = {};          // LOCATE results by reg::Status
   std::uint64_t errors_by_code[7] = {};            // every command's ERROR register, by reg::Error
   std::uint64_t picks = 0;                         // DONE_OK results: poses handed to the PLC (LOCATE, NEXT)
+  std::uint64_t picks_took_nothing = 0;            // picks after which the bin read as before there
   std::uint64_t budget_exhausted = 0;              // LOCATEs the budget cut short
   std::uint64_t cycle_buckets[kBuckets + 1] = {};  // LOCATE cycle times, not cumulative; last: +Inf
   double cycle_sum_s = 0;

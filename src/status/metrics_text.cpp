@@ -61,6 +61,10 @@ std::string render_metrics(const StatusView& view, const StatusInfo& info) {
 
   e.family("pipeloc_picks_total", "counter", "Poses handed to the PLC (DONE_OK after LOCATE or NEXT).");
   e.sample("pipeloc_picks_total", double(s.picks));
+  e.family("pipeloc_picks_took_nothing_total", "counter",
+           "Picks after which the bin read as before where the pose lay: a wrong pose or a failed grip "
+           "(frames in the log folder's took-nothing/).");
+  e.sample("pipeloc_picks_took_nothing_total", double(s.picks_took_nothing));
   e.family("pipeloc_budget_exhausted_total", "counter", "LOCATE cycles the budget cut short.");
   e.sample("pipeloc_budget_exhausted_total", double(s.budget_exhausted));
   e.family("pipeloc_heartbeats_total", "counter",

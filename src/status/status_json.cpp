@@ -55,6 +55,7 @@ std::string render_status_json(const StatusView& v, const StatusInfo& info) {
   j["errors"] = Json::object();
   for (int code = 1; code < 7; ++code) j["errors"][error_name(reg::Error(code))] = s.errors_by_code[code];
   j["picks"] = s.picks;
+  j["picks_took_nothing"] = s.picks_took_nothing;
   j["budget_exhausted"] = s.budget_exhausted;
   j["heartbeats"] = s.heartbeats;
   j["last_locate"] = s.has_locate ? row_json(s.last_locate) : Json(nullptr);

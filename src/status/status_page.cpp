@@ -145,6 +145,8 @@ std::string counts_section(const StatusSnapshot& s) {
          cell(std::to_string(s.errors_by_code[code])) + "</tr>";
   h += "</table><table><tr>" + head("other", true) + head("") + "</tr>";
   h += "<tr>" + cell("poses handed out (DONE_OK)", true) + cell(std::to_string(s.picks)) + "</tr>";
+  h += "<tr>" + cell("picks that took nothing (log folder, took-nothing/)", true) +
+       cell(std::to_string(s.picks_took_nothing)) + "</tr>";
   h += "<tr>" + cell("NEXT commands", true) + cell(std::to_string(s.commands_by_type[1])) + "</tr>";
   h += "<tr>" + cell("CLEAR_ERROR commands", true) + cell(std::to_string(s.commands_by_type[2])) + "</tr>";
   h += "<tr>" + cell("HEARTBEAT increments", true) + cell(std::to_string(s.heartbeats)) +

@@ -132,6 +132,7 @@ refresh_s = 2
         self.assertEqual(value("pipeloc_commands_total", command="other"), 1)
         self.assertEqual(value("pipeloc_errors_total", code="5", error="bad_command"), 1)
         self.assertEqual(value("pipeloc_picks_total"), self.picks)
+        self.assertEqual(value("pipeloc_picks_took_nothing_total"), 0)  # the sim source took each pipe picked
         self.assertGreater(value("pipeloc_heartbeats_total"), 0)
         self.assertEqual(value("pipeloc_healthy"), 1)
         self.assertGreaterEqual(value("pipeloc_plc_clients"), 1)
@@ -153,6 +154,7 @@ refresh_s = 2
             for got, want in zip(s["poses"][0]["xyz_mm"], (x, y, z)):
                 self.assertAlmostEqual(got, want, delta=0.01)
             self.assertAlmostEqual(s["poses"][0]["score"], f32(self.last_locate, SCORE), delta=1e-5)
+        self.assertEqual((s["picks"], s["picks_took_nothing"]), (self.picks, 0))
         self.assertEqual(s["recent"][0]["command"], "unknown")
         self.assertEqual(s["recent"][0]["error"], "bad_command")
         self.assertEqual(len(s["history"]["cycle_ms"]), 4)
