@@ -559,6 +559,27 @@ TEST(Service, APoseWhosePickTookNothingIsNotHandedOutAgain) {
   }
 }
 
+bool ends_with(const std::string& f, const std::string& end) {
+  return f.size() >= end.size() && f.compare(f.size() - end.size(), end.size(), end) == 0;
+}
+
+// The width a PNG file's header gives; -1 where the file is not a PNG.
+int png_width(const std::string& path) {
+  std::ifstream png(path, std::ios::binary);
+  unsigned char head[24] = {};
+  png.read(reinterpret_cast<char*>(head), sizeof head);
+  if (std::string(reinterpret_cast<char*>(head + 1), 3) != "PNG") return -1;
+  return (head[16] << 24) | (head[17] << 16) | (head[18] << 8) | head[19];
+}
+
+// The largest difference between a depth frame read back and the one the service located.
+double worst_difference(const std::vector<float>& back, const std::vector<float>& located) {
+  double worst = 0;
+  for (std::size_t k = 0; k < back.size() && k < located.size(); ++k)
+    worst = std::max(worst, double(std::abs(back[k] - located[k])));
+  return worst;
+}
+
 // A pick that took nothing keeps, for the maintainer, the frame its pose was found in, the pose
 // as handed out and a picture of it (log.took_nothing_frames, the last N), and the next LOCATE's
 // log line says so.
@@ -595,9 +616,6 @@ TEST(Service, APickThatTookNothingKeepsTheFrameItWasFoundIn) {
   EXPECT_EQ(snap.picks, picks.size());
   EXPECT_EQ(snap.picks_took_nothing, picks.size());  // the status page's and /metrics' count
   ASSERT_FALSE(picked_before) << "the service should stop handing out the poses it tried";
-  const auto ends_with = [](const std::string& f, const std::string& end) {
-    return f.size() >= end.size() && f.compare(f.size() - end.size(), end.size(), end) == 0;
-  };
   std::vector<std::string> files;
   for (const auto& entry : std::filesystem::directory_iterator(dir.file("log/took-nothing")))
     files.push_back(entry.path().string());
@@ -623,10 +641,7 @@ TEST(Service, APickThatTookNothingKeepsTheFrameItWasFoundIn) {
     CameraInfo cam = read_scene_camera(camera).at(0);
     const Image<float> back = read_depth_for_camera(depth, camera, 0, &cam);
     ASSERT_EQ(back.pixels.size(), p.depth.size());
-    double worst = 0;
-    for (std::size_t i = 0; i < back.pixels.size(); ++i)
-      worst = std::max(worst, double(std::abs(back.pixels[i] - p.depth[i])));
-    EXPECT_EQ(worst, 0.0);
+    EXPECT_EQ(worst_difference(back.pixels, p.depth), 0.0);
     std::ifstream in(pick);
     const nlohmann::json j = nlohmann::json::parse(in);
     EXPECT_EQ(j.at("cycle").get<std::uint32_t>(), p.cycle);
@@ -635,12 +650,7 @@ TEST(Service, APickThatTookNothingKeepsTheFrameItWasFoundIn) {
     ASSERT_EQ(m.size(), 16u);
     for (int r = 0; r < 4; ++r)
       for (int c = 0; c < 4; ++c) EXPECT_NEAR(m[std::size_t(4 * r + c)], p.pose.matrix()(r, c), 1e-9);
-    // The picture is a PNG of the frame's size.
-    std::ifstream png(overlay, std::ios::binary);
-    unsigned char head[24] = {};
-    png.read(reinterpret_cast<char*>(head), sizeof head);
-    EXPECT_EQ(std::string(reinterpret_cast<char*>(head + 1), 3), "PNG");
-    EXPECT_EQ((head[16] << 24) | (head[17] << 16) | (head[18] << 8) | head[19], back.width);
+    EXPECT_EQ(png_width(overlay), back.width);  // the picture is a PNG of the frame's size
   }
 }
 
@@ -660,9 +670,6 @@ TEST(Service, LocatesWithoutAPickKeepTheirLastFramesToLocateAgain) {
   }
   ASSERT_EQ(no_pick, 3);  // the one pipe picked (or not found), then an empty bin
   std::vector<std::string> depth, camera, overlay;
-  const auto ends_with = [](const std::string& f, const std::string& end) {
-    return f.size() >= end.size() && f.compare(f.size() - end.size(), end.size(), end) == 0;
-  };
   for (const auto& entry : std::filesystem::directory_iterator(dir.file("log/no-pick"))) {
     const std::string f = entry.path().string();
     (ends_with(f, "-depth.png") ? depth : ends_with(f, "-camera.json") ? camera : overlay).push_back(f);
@@ -681,16 +688,8 @@ TEST(Service, LocatesWithoutAPickKeepTheirLastFramesToLocateAgain) {
   EXPECT_EQ(cam.world_to_cam.has_value(), frame.camera.world_to_cam.has_value());
   ASSERT_EQ(back.width, frame.depth_mm.width);
   ASSERT_EQ(back.height, frame.depth_mm.height);
-  double worst = 0;
-  for (std::size_t k = 0; k < back.pixels.size(); ++k)
-    worst = std::max(worst, double(std::abs(back.pixels[k] - frame.depth_mm.pixels[k])));
-  EXPECT_EQ(worst, 0.0);
-  // The overlay is a PNG of the frame's size.
-  std::ifstream png(overlay[0], std::ios::binary);
-  unsigned char head[24] = {};
-  png.read(reinterpret_cast<char*>(head), sizeof head);
-  EXPECT_EQ(std::string(reinterpret_cast<char*>(head + 1), 3), "PNG");
-  EXPECT_EQ((head[16] << 24) | (head[17] << 16) | (head[18] << 8) | head[19], frame.depth_mm.width);
+  EXPECT_EQ(worst_difference(back.pixels, frame.depth_mm.pixels), 0.0);
+  EXPECT_EQ(png_width(overlay[0]), frame.depth_mm.width);  // the overlay is a PNG of the frame's size
 }
 
 // CLEAR_ERROR clears the error only: the poses of the last LOCATE stay, and NEXT after it
