@@ -183,7 +183,7 @@ void add_timing_report(CLI::App& app) {
     std::map<std::string, std::vector<double>> series;  // a stage's times where it ran (> 0)
     std::map<std::string, std::vector<double>> by_outcome;
     std::vector<Cycle> all;
-    int cycles = 0, cut = 0, malformed = 0;
+    int cycles = 0, cut = 0, malformed = 0, picked = 0, took_nothing = 0;
     double budget_ms = 0;
     for (const std::string& path : opt->logs) {
       std::ifstream in(path);
@@ -221,6 +221,8 @@ void add_timing_report(CLI::App& app) {
         by_outcome[outcome].push_back(cycle_ms);
         all.push_back({field<double>(j, "trigger_unix_ms", 0.0, path, n), cycle_ms, outcome});
         cut += field<bool>(j, "budget_exhausted", false, path, n);
+        picked += outcome == "DONE_OK";
+        took_nothing += field<bool>(j, "last_pick_took_nothing", false, path, n);
         budget_ms = field<double>(j, "budget_ms", budget_ms, path, n);
       }
     }
@@ -231,6 +233,10 @@ void add_timing_report(CLI::App& app) {
         "%d LOCATE cycles from %s to %s UTC, budget %.0f ms, cut short by the budget %d (%.1f %%)%s\n",
         cycles, utc_text(t0).c_str(), utc_text(t1).c_str(), budget_ms, cut, 100.0 * cut / cycles,
         malformed ? (", " + std::to_string(malformed) + " unreadable lines").c_str() : "");
+    std::printf(
+        "picks: %d LOCATEs handed out a pose; %d picks took nothing (the next LOCATE read the bin as before "
+        "there: a wrong pose or a failed grip; their frames in the log folder's took-nothing/)\n",
+        picked, took_nothing);
     std::printf("%-14s %7s %9s %9s %9s %9s\n", "stage", "cycles", "p50_ms", "p95_ms", "p99_ms", "max_ms");
     for (const char* k : kStages) {
       const auto& v = series[k];

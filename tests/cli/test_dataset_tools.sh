@@ -53,4 +53,34 @@ set -e
 [ "$status" -eq 2 ] || fail "an unknown option exited $status, not 2"
 grep -q "no-such-option" "$work/err.txt" || fail "the error does not name the option: $(cat "$work/err.txt")"
 "$bin" eval-bop --help > /dev/null || fail "--help did not exit 0"
+# timing-report on a real serve's log (the sim source, plc.mode none): the picks it counts are the
+# log's DONE_OK LOCATEs and those it says took nothing the log's last_pick_took_nothing lines.
+cat > "$work/serve.toml" <<'EOF'
+[model]
+preset = "u"
+[source]
+kind = "sim"
+[source.sim]
+pipes = 6
+seed = 5
+[plc]
+mode = "none"
+[service]
+budget_ms = 5000
+EOF
+timeout 120 "$bin" serve --config "$work/serve.toml" --trigger-ms 50 --cycles 6 --log-dir "$work/serve-log" \
+  > "$work/serve.out" 2>&1 || fail "serve on the sim source: $(tail -3 "$work/serve.out")"
+"$bin" timing-report "$work/serve-log/timing.jsonl" --png "$work/timing.png" > "$work/report.txt" ||
+  fail "timing-report: $(cat "$work/report.txt")"
+want=$(python3 - "$work/serve-log/timing.jsonl" <<'PY'
+import json, sys
+lines = [json.loads(l) for l in open(sys.argv[1])]
+cycles = [j for j in lines if j.get("event") == "cycle" and j["cmd"] == 1]
+assert len(cycles) == 6, len(cycles)
+print(f"picks: {sum(j['status'] == 'DONE_OK' for j in cycles)} LOCATEs handed out a pose; "
+      f"{sum(j['last_pick_took_nothing'] for j in cycles)} picks took nothing")
+PY
+)
+grep -qF "$want" "$work/report.txt" || fail "timing-report does not say '$want': $(head -3 "$work/report.txt")"
+
 echo "1 passed, 0 failed"
