@@ -5,24 +5,49 @@
 
 namespace pipeloc {
 
+namespace {
+
+// A surface point of the pose the frame shows: facing the camera (within 60 degrees) and read
+// where it lies (within D/2), so that taking the pipe away moves the depth there by at least 3/4 D.
+// Where a pixel sees past the pipe (its ends, its rim, what covers it), the pick changes nothing.
+bool seen_on_top(const Eigen::Vector3d& c, const Eigen::Vector3d& normal, const Image<float>& depth_mm,
+                 const Intrinsics& k, float half_d, int* pixel) {
+  if (c.z() <= 0 || normal.dot(c.normalized()) > -0.5) return false;
+  const Eigen::Vector2d uv = k.project(c);
+  const int x = int(std::lround(uv.x())), y = int(std::lround(uv.y()));
+  if (!depth_mm.inside(x, y)) return false;
+  const float z = depth_mm.at(x, y);
+  if (!(z > 0) || std::abs(double(z) - c.z()) > half_d) return false;
+  *pixel = y * depth_mm.width + x;
+  return true;
+}
+
+}  // namespace
+
 void TriedPicks::handed_out(const Pose& model_to_cam, const Image<float>& depth_mm, const Intrinsics& k,
                             const LocatorModel& lm) {
   last_ = model_to_cam;
   has_last_ = true;
   Footprint& f = last_footprint_;
   f.n = 0;
-  const std::size_t points = lm.check_points.size();
-  const std::size_t step = std::max<std::size_t>(1, points / kFootprintPx);
-  for (std::size_t i = 0; i < points && f.n < kFootprintPx; i += step) {
-    const Eigen::Vector3d c = model_to_cam * lm.check_points[i].cast<double>();
-    if (c.z() <= 0) continue;
-    const Eigen::Vector2d uv = k.project(c);
-    const int x = int(std::lround(uv.x())), y = int(std::lround(uv.y()));
-    if (!depth_mm.inside(x, y)) continue;
-    const float z = depth_mm.at(x, y);
-    if (!(z > 0)) continue;
-    f.pixel[std::size_t(f.n)] = y * depth_mm.width + x;
-    f.depth_mm[std::size_t(f.n)] = z;
+  const SurfaceSamples& surface = lm.model->surface;
+  const std::size_t points = surface.points.size();
+  const float half_d = 0.5f * lm.tube_d_mm;
+  // At most kExamined samples spread over the surface; of those the frame shows on top, every
+  // take-th, so that the footprint spreads over the whole pipe too (two passes: no allocation).
+  const std::size_t stride = std::max<std::size_t>(1, points / kExamined);
+  const auto seen = [&](std::size_t i, int* pixel) {
+    return seen_on_top(model_to_cam * surface.points[i].cast<double>(),
+                       model_to_cam.linear() * surface.normals[i].cast<double>(), depth_mm, k, half_d, pixel);
+  };
+  int on_top = 0, pixel = 0;
+  for (std::size_t i = 0; i < points; i += stride) on_top += seen(i, &pixel);
+  const int take = std::max(1, (on_top + kFootprintPx - 1) / kFootprintPx);
+  int counted = 0;
+  for (std::size_t i = 0; i < points && f.n < kFootprintPx; i += stride) {
+    if (!seen(i, &pixel) || counted++ % take != 0) continue;
+    f.pixel[std::size_t(f.n)] = pixel;
+    f.depth_mm[std::size_t(f.n)] = depth_mm.pixels[std::size_t(pixel)];
     ++f.n;
   }
 }
