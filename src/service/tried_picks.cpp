@@ -31,7 +31,7 @@ void TriedPicks::handed_out(const Pose& model_to_cam, const Image<float>& depth_
   Footprint& f = last_footprint_;
   f.n = 0;
   const SurfaceSamples& surface = lm.model->surface;
-  const std::size_t points = surface.points.size();
+  const std::size_t points = std::min(surface.points.size(), surface.normals.size());
   const float half_d = 0.5f * lm.tube_d_mm;
   // At most kExamined samples spread over the surface; of those the frame shows on top, every
   // take-th, so that the footprint spreads over the whole pipe too (two passes: no allocation).
