@@ -30,6 +30,8 @@ for r in z["rows"]:
     assert set(c["stop_withheld"]) <= {"ambiguous", "covered", "part_seen", "goes_on", "no_end", "second_search",
                                        "noisy", "took_nothing"} and all(n >= 0 for n in c["stop_withheld"].values()), c
     assert c["stop_found"] >= 0 and all(n <= c["stop_found"] for n in c["stop_withheld"].values()), c
+    # A wrong pick takes nothing on the sim source: the service saw each, and no right pick as one.
+    assert c["took_nothing"] == c["wrong"], c
 PY
 grep -qE ' seen +clear ' "$work/zoo.txt" || fail "no seen/clear columns: $(head -12 "$work/zoo.txt")"
 grep -q '^clearing: ' "$work/zoo.txt" || fail "no clearing line: $(tail -8 "$work/zoo.txt")"
