@@ -433,13 +433,20 @@ TEST(Service, LocateNextClearAndBadCommand) {
   EXPECT_EQ(s.service->run(7, 13, Clock::now()).error, reg::Error::bad_command);
 }
 
+// A bin the service clears: the sim source without refill, a budget the picks never reach (these
+// tests are of the picks, not of the time).
+AppConfig bin_to_clear(const test::TempDir& dir, int pipes, int seed) {
+  AppConfig cfg = test::sim_config(dir, pipes, seed);
+  cfg.source.sim.refill = false;
+  cfg.service.budget_ms = 20000;
+  return cfg;
+}
+
 // The cell's own measure: a small bin, no refill, LOCATE until DONE_NONE; each pose handed out
 // is taken (by the sim source, when within 10 mm of a pipe). The bin is emptied without a wrong pick.
 TEST(Service, ASmallBinIsClearedWithoutAWrongPick) {
   test::TempDir dir;
-  AppConfig cfg = test::sim_config(dir, 5, 21);
-  cfg.source.sim.refill = false;
-  cfg.service.budget_ms = 20000;  // the picks are measured here, not the time
+  AppConfig cfg = bin_to_clear(dir, 5, 21);
   auto src = std::make_unique<SimSource>(sbend(), cfg.source.sim);
   SimSource* sim = src.get();
   Service service(cfg, sbend(), std::move(src));
@@ -524,9 +531,7 @@ TEST(Service, APoseWhosePickTookNothingIsNotHandedOutAgain) {
   for (const bool withhold : {true, false}) {
     SCOPED_TRACE(withhold ? "withheld" : "handed out again");
     test::TempDir dir;
-    AppConfig cfg = test::sim_config(dir, 3, 21);
-    cfg.source.sim.refill = false;
-    cfg.service.budget_ms = 20000;  // the picks are tested here, not the time
+    AppConfig cfg = bin_to_clear(dir, 3, 21);
     cfg.service.withhold_unchanged_picks = withhold;
     auto src = std::make_unique<GripperTakesNothing>(sbend(), cfg.source.sim);
     const GripperTakesNothing* gripper = src.get();
@@ -587,10 +592,8 @@ double worst_difference(const std::vector<float>& back, const std::vector<float>
 TEST(Service, APickThatTakesItsPipeNeverReadsAsTakingNothing) {
   const PipeModel tube = pipe_of("S86", 21.7, "straight tube");
   test::TempDir dir;
-  AppConfig cfg = test::sim_config(dir, 12, 1000);
-  cfg.source.sim.refill = false;
+  AppConfig cfg = bin_to_clear(dir, 12, 1000);
   cfg.source.sim.camera_height_min_mm = 779, cfg.source.sim.camera_height_max_mm = 879;
-  cfg.service.budget_ms = 20000;  // the picks are tested here, not the time
   auto src = std::make_unique<SimSource>(tube, cfg.source.sim);
   SimSource* sim = src.get();
   Service service(cfg, tube, std::move(src));
@@ -613,9 +616,7 @@ TEST(Service, APickThatTakesItsPipeNeverReadsAsTakingNothing) {
 // log line says so.
 TEST(Service, APickThatTookNothingKeepsTheFrameItWasFoundIn) {
   test::TempDir dir;
-  AppConfig cfg = test::sim_config(dir, 3, 21);
-  cfg.source.sim.refill = false;
-  cfg.service.budget_ms = 20000;
+  AppConfig cfg = bin_to_clear(dir, 3, 21);
   cfg.log.took_nothing_frames = 2;
   Service service(cfg, sbend(), std::make_unique<GripperTakesNothing>(sbend(), cfg.source.sim));
   StatusBoard board;
@@ -686,9 +687,7 @@ TEST(Service, APickThatTookNothingKeepsTheFrameItWasFoundIn) {
 // depth PNG and the camera file that `pipeloc locate` reads, and the overlay; only the last N.
 TEST(Service, LocatesWithoutAPickKeepTheirLastFramesToLocateAgain) {
   test::TempDir dir;
-  AppConfig cfg = test::sim_config(dir, 1, 21);
-  cfg.source.sim.refill = false;
-  cfg.service.budget_ms = 20000;
+  AppConfig cfg = bin_to_clear(dir, 1, 21);
   cfg.log.no_pick_frames = 2;
   Service service(cfg, sbend(), std::make_unique<SimSource>(sbend(), cfg.source.sim));
   int no_pick = 0;

@@ -23,7 +23,7 @@ Rgb ramp(float t) {
 
 }  // namespace
 
-Image<Rgb> shade_depth(const Image<float>& depth) {
+Image<Rgb> shade_depth(const Image<float>& depth, DepthShade shade) {
   Image<Rgb> out(depth.width, depth.height);
   std::vector<float> valid;
   valid.reserve(depth.pixels.size());
@@ -36,8 +36,12 @@ Image<Rgb> shade_depth(const Image<float>& depth) {
     return *it;
   };
   const float near = at(0.02), far = std::max(at(0.98), near + 1.0f);
-  for (std::size_t i = 0; i < depth.pixels.size(); ++i)
-    if (depth.pixels[i] > 0) out.pixels[i] = ramp((depth.pixels[i] - near) / (far - near));
+  for (std::size_t i = 0; i < depth.pixels.size(); ++i) {
+    if (!(depth.pixels[i] > 0)) continue;
+    const float t = (depth.pixels[i] - near) / (far - near);
+    const auto g = std::uint8_t(235 - 195 * std::clamp(t, 0.0f, 1.0f));
+    out.pixels[i] = shade == DepthShade::rainbow ? ramp(t) : Rgb{g, g, g};
+  }
   return out;
 }
 

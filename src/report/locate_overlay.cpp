@@ -28,17 +28,19 @@ Eigen::Vector2d to_pixel(const CameraInfo& cam, const Pose& bin_to_cam, const Ei
   return cam.intrinsics.project(bin_to_cam * p_bin.cast<double>());
 }
 
+// A pixel of a render's outline: rendered, at the edge of its box or beside a pixel not rendered.
+bool on_outline(const Image<float>& z, const PixelBox& box, int x, int y) {
+  if (z.at(x, y) <= 0) return false;
+  return x == box.x0 || y == box.y0 || x == box.x1 || y == box.y1 || z.at(x - 1, y) <= 0 ||
+         z.at(x + 1, y) <= 0 || z.at(x, y - 1) <= 0 || z.at(x, y + 1) <= 0;
+}
+
 void draw_outline(Image<Rgb>* img, const Mesh& mesh, const Pose& model_to_cam, const Intrinsics& k, Rgb color,
                   int thickness, Image<float>* scratch, ProjectedMesh* projected) {
   const PixelBox box = render_depth_in_box(mesh, model_to_cam, k, scratch, projected);
   for (int y = box.y0; y <= box.y1; ++y)
-    for (int x = box.x0; x <= box.x1; ++x) {
-      if (scratch->at(x, y) <= 0) continue;
-      const bool edge = x == box.x0 || y == box.y0 || x == box.x1 || y == box.y1 ||
-                        scratch->at(x - 1, y) <= 0 || scratch->at(x + 1, y) <= 0 ||
-                        scratch->at(x, y - 1) <= 0 || scratch->at(x, y + 1) <= 0;
-      if (edge) draw_dot(img, x, y, thickness / 2, color);
-    }
+    for (int x = box.x0; x <= box.x1; ++x)
+      if (on_outline(*scratch, box, x, y)) draw_dot(img, x, y, thickness / 2, color);
 }
 
 void draw_legend(Image<Rgb>* img) {
@@ -104,28 +106,6 @@ Image<Rgb> grey_depth(const Image<float>& depth) {
   for (auto& p : img.pixels) {
     const std::uint8_t g = std::uint8_t((p.r + p.g + p.b) / 3 * 0.7);
     p = {g, g, g};
-  }
-  return img;
-}
-
-// Depth in grey, near bright and far dark between its 2nd and 98th percentile; no reading black.
-Image<Rgb> grey_relief(const Image<float>& depth) {
-  std::vector<float> valid;
-  for (float z : depth.pixels)
-    if (z > 0) valid.push_back(z);
-  Image<Rgb> img(depth.width, depth.height, Rgb{0, 0, 0});
-  if (valid.empty()) return img;
-  const auto at = [&](double q) {
-    auto k = valid.begin() + std::ptrdiff_t(q * double(valid.size() - 1));
-    std::nth_element(valid.begin(), k, valid.end());
-    return *k;
-  };
-  const float near = at(0.02), far = at(0.98), span = std::max(far - near, 1e-3f);
-  for (std::size_t i = 0; i < depth.pixels.size(); ++i) {
-    const float z = depth.pixels[i];
-    if (!(z > 0)) continue;
-    const auto g = std::uint8_t(235 - 195 * std::clamp((z - near) / span, 0.0f, 1.0f));
-    img.pixels[i] = {g, g, g};
   }
   return img;
 }
@@ -252,7 +232,7 @@ Image<Rgb> draw_pose_overlay(const Image<float>& depth, const CameraInfo& cam, c
   Image<float> around(w, h, 0.0f);
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) around.at(x, y) = depth.at(x0 + x, y0 + y);
-  const Image<Rgb> local = grey_relief(around);
+  const Image<Rgb> local = shade_depth(around, DepthShade::grey);
   const int ox = depth.width - w * scale - 6, oy = depth.height - h * scale - 6;
   if (ox < 0 || oy < 30) return img;  // the pose fills the view: the frame itself shows it
   for (int y = -1; y <= h * scale; ++y)
@@ -260,10 +240,8 @@ Image<Rgb> draw_pose_overlay(const Image<float>& depth, const CameraInfo& cam, c
       Rgb c = kPick;  // the inset's frame
       if (x >= 0 && y >= 0 && x < w * scale && y < h * scale) {
         const int sx = x / scale, sy = y / scale, fx = x0 + sx, fy = y0 + sy;
-        const bool in = scratch.at(fx, fy) > 0;
-        const bool edge = in && (fx == 0 || fy == 0 || fx == depth.width - 1 || fy == depth.height - 1 ||
-                                 scratch.at(fx - 1, fy) <= 0 || scratch.at(fx + 1, fy) <= 0 ||
-                                 scratch.at(fx, fy - 1) <= 0 || scratch.at(fx, fy + 1) <= 0);
+        const bool edge =
+            fx >= box.x0 && fx <= box.x1 && fy >= box.y0 && fy <= box.y1 && on_outline(scratch, box, fx, fy);
         c = edge ? kPick : local.at(sx, sy);
       }
       if (img.inside(ox + x, oy + y)) img.at(ox + x, oy + y) = c;
