@@ -46,6 +46,66 @@ TEST(Verification, SkippingBackFacesOfAClosedModelDrawsTheSameDepth) {
   EXPECT_GT(drawn, 3000);
 }
 
+// The rasterizer scans each row only where a triangle can cover it: it must draw exactly the pixel
+// centres inside each triangle, as a test of every pixel of the image finds them, for long thin
+// triangles lying across the image (a straight tube's faces), edges along a row, tiny triangles
+// and triangles reaching beyond the image.
+TEST(Verification, ATriangleDrawsExactlyThePixelCentresInsideIt) {
+  Intrinsics k;
+  k.width = 640, k.height = 480, k.fx = k.fy = 570, k.cx = 319.5, k.cy = 239.5;
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> across(-80, 720), near(-3, 3), depth(800, 1200);
+  const auto inside = [](const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c,
+                         double x, double y) {
+    const auto side = [&](const Eigen::Vector2d& p, const Eigen::Vector2d& q) {
+      return (q.x() - p.x()) * (y - p.y()) - (q.y() - p.y()) * (x - p.x());
+    };
+    const double s0 = side(b, c), s1 = side(c, a), s2 = side(a, b);
+    return (s0 >= 0 && s1 >= 0 && s2 >= 0) || (s0 <= 0 && s1 <= 0 && s2 <= 0);
+  };
+  Image<float> z(k.width, k.height, 0.0f);
+  ProjectedMesh projected;
+  int drawn = 0, differ = 0;
+  for (int t = 0; t < 400; ++t) {
+    Eigen::Vector2d px[3];
+    px[0] = {across(rng), across(rng) * 0.6};
+    switch (t % 4) {
+      case 0:  // a sliver across the image
+        px[1] = {across(rng), across(rng) * 0.6}, px[2] = px[1] + Eigen::Vector2d(near(rng), near(rng));
+        break;
+      case 1:  // an edge along a row
+        px[1] = {across(rng), px[0].y()}, px[2] = {across(rng), across(rng) * 0.6};
+        break;
+      case 2:  // a few pixels wide
+        px[1] = px[0] + Eigen::Vector2d(near(rng), near(rng)),
+        px[2] = px[0] + Eigen::Vector2d(near(rng), near(rng));
+        break;
+      default:
+        px[1] = {across(rng), across(rng) * 0.6}, px[2] = {across(rng), across(rng) * 0.6};
+    }
+    Mesh tri;
+    for (const Eigen::Vector2d& p : px) {
+      const double d = depth(rng);
+      tri.vertices.emplace_back(float((p.x() - k.cx) / k.fx * d), float((p.y() - k.cy) / k.fy * d), float(d));
+    }
+    tri.faces.push_back({0, 1, 2});
+    projected.reserve(tri);
+    z.fill(0.0f);
+    const PixelBox box = render_depth_in_box(tri, Pose::Identity(), k, &z, &projected);
+    // The corners as the renderer projects them: its test and this one then judge the same triangle.
+    const Eigen::Vector2d &a = projected.px[0], &b = projected.px[1], &c = projected.px[2];
+    for (int y = 0; y < k.height; ++y)
+      for (int x = 0; x < k.width; ++x) {
+        const bool in_box = x >= box.x0 && x <= box.x1 && y >= box.y0 && y <= box.y1;
+        const bool expected = in_box && inside(a, b, c, x, y);
+        drawn += z.at(x, y) > 0;
+        differ += (z.at(x, y) > 0) != expected;
+      }
+  }
+  EXPECT_EQ(differ, 0);
+  EXPECT_GT(drawn, 100000);
+}
+
 // A pixel without a reading (a sensor's shadow, a specular hole) is neither for nor against a
 // pose: counted apart, neither agreeing nor free space nor in front.
 TEST(Verification, PixelsWithoutAReadingAreCountedApart) {

@@ -10,7 +10,18 @@ double edge(const Eigen::Vector2d& a, const Eigen::Vector2d& b, double x, double
   return (b.x() - a.x()) * (y - a.y()) - (b.y() - a.y()) * (x - a.x());
 }
 
+// An edge whose end points' rows differ by less than this (px) is taken as running along the
+// row: it does not narrow a row's span (the exact test alone judges it).
+constexpr double kRowEdgeMinRise = 1e-6;
+// Triangles narrower than this (px) are scanned over their whole box: working out spans costs
+// more than it saves.
+constexpr int kSpanMinWidthPx = 8;
+
 // Visits the integer pixel centres inside the screen triangle s0 s1 s2 (either winding).
+// A wide triangle's rows are scanned only over the span where the three edges' tests can hold (a
+// long thin triangle lying across the image would otherwise be tested over its whole bounding
+// box); the span is widened by a pixel each way, and every pixel in it takes the exact test, so
+// the pixels visited are those of the test over the box.
 template <typename Visit>
 void scan_triangle(const Eigen::Vector2d& s0, const Eigen::Vector2d& s1, const Eigen::Vector2d& s2, int width,
                    int height, Visit visit) {
@@ -21,10 +32,46 @@ void scan_triangle(const Eigen::Vector2d& s0, const Eigen::Vector2d& s1, const E
   const int x1 = std::min(width - 1, int(std::floor(std::max({s0.x(), s1.x(), s2.x()}))));
   const int y0 = std::max(0, int(std::ceil(std::min({s0.y(), s1.y(), s2.y()}))));
   const int y1 = std::min(height - 1, int(std::floor(std::max({s0.y(), s1.y(), s2.y()}))));
-  for (int y = y0; y <= y1; ++y)
-    for (int x = x0; x <= x1; ++x)
-      if (sign * edge(s1, s2, x, y) >= 0 && sign * edge(s2, s0, x, y) >= 0 && sign * edge(s0, s1, x, y) >= 0)
-        visit(x, y);
+  const auto inside = [&](int x, int y) {
+    return sign * edge(s1, s2, x, y) >= 0 && sign * edge(s2, s0, x, y) >= 0 && sign * edge(s0, s1, x, y) >= 0;
+  };
+  if (x1 - x0 < kSpanMinWidthPx) {
+    for (int y = y0; y <= y1; ++y)
+      for (int x = x0; x <= x1; ++x)
+        if (inside(x, y)) visit(x, y);
+    return;
+  }
+  // Along a row, edge a -> b's test holds on one side of x = a.x + (b.x - a.x) (y - a.y) / rise
+  // (rise = b.y - a.y): at or beyond it where sign * rise < 0, up to it otherwise.
+  struct Bound {
+    double at_y0, per_row;
+    bool lower;
+  };
+  Bound bounds[3];
+  int n_bounds = 0;
+  const Eigen::Vector2d* const edges[3][2] = {{&s1, &s2}, {&s2, &s0}, {&s0, &s1}};
+  for (const auto& e : edges) {
+    const Eigen::Vector2d &a = *e[0], &b = *e[1];
+    const double rise = b.y() - a.y();
+    if (std::abs(rise) < kRowEdgeMinRise) continue;
+    const double per_row = (b.x() - a.x()) / rise;
+    bounds[n_bounds++] = {a.x() + per_row * (y0 - a.y()), per_row, sign * rise < 0};
+  }
+  for (int y = y0; y <= y1; ++y) {
+    double lo = x0, hi = x1;
+    for (int i = 0; i < n_bounds; ++i) {
+      const double root = bounds[i].at_y0 + bounds[i].per_row * (y - y0);
+      if (bounds[i].lower)
+        lo = std::max(lo, root);
+      else
+        hi = std::min(hi, root);
+    }
+    if (!(lo <= hi + 2)) continue;
+    const int from = std::max(x0, int(std::floor(std::min(lo, double(x1)))) - 1);
+    const int to = std::min(x1, int(std::ceil(std::max(hi, double(x0)))) + 1);
+    for (int x = from; x <= to; ++x)
+      if (inside(x, y)) visit(x, y);
+  }
 }
 
 }  // namespace
