@@ -106,6 +106,49 @@ TEST(Verification, ATriangleDrawsExactlyThePixelCentresInsideIt) {
   EXPECT_GT(drawn, 100000);
 }
 
+// Verification reads only the columns the renderer kept per row: they must hold every pixel it
+// drew, for a U seen from above, from the side and tilted, and a straight tube lying across the
+// image (long faces); and a verification with them must count what one over the whole box does.
+TEST(Verification, TheDrawnColumnsHoldEveryPixelDrawn) {
+  Intrinsics k;
+  k.width = 640, k.height = 480, k.fx = k.fy = 570, k.cx = 320, k.cy = 240;
+  Image<float> z(k.width, k.height, 0.0f), depth(k.width, k.height, 900.0f);
+  const PipeModel straight = pipe_of("S600", 30, "straight");
+  for (const PipeModel* pipe : {&preset_model("u"), &straight}) {
+    const PipeModel& model = *pipe;
+    const std::string& preset = model.source;
+    const Mesh welded = weld_vertices(model.mesh, model.tube_diameter_mm / 8);
+    ProjectedMesh rows, no_rows;
+    rows.reserve(welded, k.height);
+    no_rows.reserve(welded);
+    int drawn = 0;
+    for (const Eigen::Vector3d& turn :
+         {Eigen::Vector3d(0, 0, 0.6), Eigen::Vector3d(1.2, 0.3, 0), Eigen::Vector3d(0.4, 1.5, 0.7)}) {
+      Pose pose = Pose::Identity();
+      pose.linear() = Eigen::AngleAxisd(turn.norm(), turn.normalized()).toRotationMatrix();
+      pose.translation() = Eigen::Vector3d(20, -10, 900) - pose.linear() * model.centroid.cast<double>();
+      const PixelBox box = render_depth_in_box(welded, pose, k, &z, &rows);
+      ASSERT_FALSE(box.empty());
+      int outside = 0;
+      for (int y = box.y0; y <= box.y1; ++y)
+        for (int x = box.x0; x <= box.x1; ++x)
+          if (z.at(x, y) > 0) {
+            ++drawn;
+            outside += x < rows.row_first[std::size_t(y)] || x > rows.row_last[std::size_t(y)];
+          }
+      EXPECT_EQ(outside, 0) << preset << " " << turn.transpose();
+      const Verification a = verify_pose(welded, Winding::open, pose, depth, k, 7, 10, 2, &z, &rows);
+      const Verification b = verify_pose(welded, Winding::open, pose, depth, k, 7, 10, 2, &z, &no_rows);
+      EXPECT_EQ(a.model_px, b.model_px);
+      EXPECT_EQ(a.agree_px, b.agree_px);
+      EXPECT_EQ(a.free_space_px, b.free_space_px);
+      EXPECT_EQ(a.side_px, b.side_px);
+      EXPECT_EQ(a.side_level_px, b.side_level_px);
+    }
+    EXPECT_GT(drawn, 3000) << preset;
+  }
+}
+
 // A pixel without a reading (a sensor's shadow, a specular hole) is neither for nor against a
 // pose: counted apart, neither agreeing nor free space nor in front.
 TEST(Verification, PixelsWithoutAReadingAreCountedApart) {

@@ -468,7 +468,7 @@ void reserve_candidate(CandidateBuffers* buf, const LocatorModel& lm, const Star
   buf->starts.reserve(buf->fits.capacity());
   buf->scratch_depth.resize(camera.width, camera.height, 0.0f);
   buf->rival_depth.resize(camera.width, camera.height, 0.0f);
-  buf->scratch_mesh.reserve(lm.verify_mesh);
+  buf->scratch_mesh.reserve(lm.verify_mesh, camera.height);
 }
 
 AxisEstimate find_axis(const CandidateContext& ctx, const CandidateInput& in, CandidateBuffers* buf) {

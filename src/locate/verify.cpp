@@ -107,8 +107,9 @@ Verification verify_pose(const Mesh& mesh, Winding winding, const Pose& model_to
       if (!model_at(x - s, y) || !model_at(x + s, y) || !model_at(x, y - s) || !model_at(x, y + s)) return false;
     return true;
   };
-  for (int y = box.y0; y <= box.y1; ++y)
-    for (int x = box.x0; x <= box.x1; ++x) {
+  for (int y = box.y0; y <= box.y1; ++y) {
+    const auto [from, to] = projected->drawn_columns(box, y, scratch->height);
+    for (int x = from; x <= to; ++x) {
       const float zm = scratch->at(x, y);
       if (zm <= 0 || !in_view(seen, x, y)) continue;
       // The silhouette's rim is left out: lateral noise mixes it with the background. Beyond it
@@ -138,6 +139,7 @@ Verification verify_pose(const Mesh& mesh, Winding winding, const Pose& model_to
       else
         ++v.agree_px;
     }
+  }
   // Beyond the paper: free space is judged as a share, and a pose across a gap (the hole of a
   // coil's loop, the space between two pipes) sees through a small share of its pixels, but all
   // of them in one place. A square hole_side_px wide seen through entirely rules the pipe out
@@ -149,14 +151,16 @@ Verification verify_pose(const Mesh& mesh, Winding winding, const Pose& model_to
       const float zm = scratch->at(x, y), zo = depth.at(x, y);
       return zm > 0 && zo > zm + tol;
     };
-    for (int y = box.y0; y <= box.y1 && !v.seen_through_patch; ++y)
-      for (int x = box.x0; x <= box.x1 && !v.seen_through_patch; ++x) {
+    for (int y = box.y0; y <= box.y1 && !v.seen_through_patch; ++y) {
+      const auto [from, to] = projected->drawn_columns(box, y, scratch->height);
+      for (int x = from; x <= to && !v.seen_through_patch; ++x) {
         if (!seen_through(x, y)) continue;
         bool all = true;
         for (int dy = 0; dy < hole_side_px && all; ++dy)
           for (int dx = 0; dx < hole_side_px && all; ++dx) all = seen_through(x + dx, y + dy);
         v.seen_through_patch = all;
       }
+    }
   }
   return v;
 }

@@ -21,10 +21,14 @@ constexpr int kSpanMinWidthPx = 8;
 // A wide triangle's rows are scanned only over the span where the three edges' tests can hold (a
 // long thin triangle lying across the image would otherwise be tested over its whole bounding
 // box); the span is widened by a pixel each way, and every pixel in it takes the exact test, so
-// the pixels visited are those of the test over the box.
-template <typename Visit>
+// the pixels visited are those of the test over the box. on_row(y, first, last) is told, once per
+// row scanned, the columns scanned there (every pixel visited in the row lies among them).
+struct NoRows {
+  void operator()(int, int, int) const {}
+};
+template <typename Visit, typename OnRow = NoRows>
 void scan_triangle(const Eigen::Vector2d& s0, const Eigen::Vector2d& s1, const Eigen::Vector2d& s2, int width,
-                   int height, Visit visit) {
+                   int height, Visit visit, OnRow on_row = {}) {
   const double area = edge(s0, s1, s2.x(), s2.y());
   if (std::abs(area) < 1e-12) return;
   const double sign = area > 0 ? 1.0 : -1.0;
@@ -36,9 +40,11 @@ void scan_triangle(const Eigen::Vector2d& s0, const Eigen::Vector2d& s1, const E
     return sign * edge(s1, s2, x, y) >= 0 && sign * edge(s2, s0, x, y) >= 0 && sign * edge(s0, s1, x, y) >= 0;
   };
   if (x1 - x0 < kSpanMinWidthPx) {
-    for (int y = y0; y <= y1; ++y)
+    for (int y = y0; y <= y1; ++y) {
+      on_row(y, x0, x1);
       for (int x = x0; x <= x1; ++x)
         if (inside(x, y)) visit(x, y);
+    }
     return;
   }
   // Along a row, edge a -> b's test holds on one side of x = a.x + (b.x - a.x) (y - a.y) / rise
@@ -69,6 +75,7 @@ void scan_triangle(const Eigen::Vector2d& s0, const Eigen::Vector2d& s1, const E
     if (!(lo <= hi + 2)) continue;
     const int from = std::max(x0, int(std::floor(std::min(lo, double(x1)))) - 1);
     const int to = std::min(x1, int(std::ceil(std::max(hi, double(x0)))) + 1);
+    on_row(y, from, to);
     for (int x = from; x <= to; ++x)
       if (inside(x, y)) visit(x, y);
   }
@@ -99,10 +106,11 @@ bool project_vertices(const Mesh& mesh, const Pose& model_to_cam, const Intrinsi
 }
 
 // Scan-converts the projected mesh; on_pixel(x, y, z, normal) for each covered pixel centre in
-// the box, with the exact depth of the triangle's plane along that pixel's ray.
-template <typename OnPixel>
+// the box, with the exact depth of the triangle's plane along that pixel's ray; on_row(y, first,
+// last) for each row a face is scanned in, with the columns scanned (image coordinates).
+template <typename OnPixel, typename OnRow = NoRows>
 void draw_perspective(const Mesh& mesh, const ProjectedMesh& pm, const Intrinsics& k, int x0, int y0, int x1,
-                      int y1, Winding winding, OnPixel on_pixel) {
+                      int y1, Winding winding, OnPixel on_pixel, OnRow on_row = {}) {
   const Eigen::Vector2d corner(x0, y0);
   // A face is turned away when its outward normal points away from the camera (at the origin).
   const double away = winding == Winding::outward ? 1 : winding == Winding::inward ? -1 : 0;
@@ -115,15 +123,17 @@ void draw_perspective(const Mesh& mesh, const ProjectedMesh& pm, const Intrinsic
     n.normalize();
     if (n.dot(p0) > 0) n = -n;  // face the camera: depth images see either side
     const double plane = n.dot(p0);
-    scan_triangle(pm.px[f[0]] - corner, pm.px[f[1]] - corner, pm.px[f[2]] - corner, x1 - x0 + 1, y1 - y0 + 1,
-                  [&](int xr, int yr) {
-                    const int x = xr + x0, y = yr + y0;
-                    const Eigen::Vector3d ray((x - k.cx) / k.fx, (y - k.cy) / k.fy, 1.0);
-                    const double denom = n.dot(ray);
-                    if (std::abs(denom) < 1e-9) return;
-                    const float z = float(plane / denom);
-                    if (z > 0) on_pixel(x, y, z, n);
-                  });
+    scan_triangle(
+        pm.px[f[0]] - corner, pm.px[f[1]] - corner, pm.px[f[2]] - corner, x1 - x0 + 1, y1 - y0 + 1,
+        [&](int xr, int yr) {
+          const int x = xr + x0, y = yr + y0;
+          const Eigen::Vector3d ray((x - k.cx) / k.fx, (y - k.cy) / k.fy, 1.0);
+          const double denom = n.dot(ray);
+          if (std::abs(denom) < 1e-9) return;
+          const float z = float(plane / denom);
+          if (z > 0) on_pixel(x, y, z, n);
+        },
+        [&](int yr, int first, int last) { on_row(yr + y0, first + x0, last + x0); });
   }
 }
 
@@ -162,11 +172,22 @@ PixelBox render_depth_in_box(const Mesh& mesh, const Pose& model_to_cam, const I
   box.y1 = std::min(z_mm->height - 1, int(std::ceil(hi_y)));
   if (box.empty()) return box;
   for (int y = box.y0; y <= box.y1; ++y) std::fill_n(&z_mm->at(box.x0, y), box.x1 - box.x0 + 1, 0.0f);
-  draw_perspective(mesh, *pm, k, box.x0, box.y0, box.x1, box.y1, winding,
-                   [&](int x, int y, float z, const Eigen::Vector3d&) {
-                     float& cur = z_mm->at(x, y);
-                     if (cur == 0 || z < cur) cur = z;
-                   });
+  const bool keep_rows = pm->has_rows(z_mm->height);
+  if (keep_rows) {
+    std::fill(pm->row_first.begin() + box.y0, pm->row_first.begin() + box.y1 + 1, box.x1 + 1);
+    std::fill(pm->row_last.begin() + box.y0, pm->row_last.begin() + box.y1 + 1, box.x0 - 1);
+  }
+  draw_perspective(
+      mesh, *pm, k, box.x0, box.y0, box.x1, box.y1, winding,
+      [&](int x, int y, float z, const Eigen::Vector3d&) {
+        float& cur = z_mm->at(x, y);
+        if (cur == 0 || z < cur) cur = z;
+      },
+      [&](int y, int first, int last) {
+        if (!keep_rows) return;
+        int &row_first = pm->row_first[std::size_t(y)], &row_last = pm->row_last[std::size_t(y)];
+        row_first = std::min(row_first, first), row_last = std::max(row_last, last);
+      });
   return box;
 }
 

@@ -2,6 +2,7 @@
 // outlines) and a top-down height map (pile building). One scan-conversion serves both.
 #pragma once
 
+#include <utility>
 #include <vector>
 
 #include "core/camera.hpp"
@@ -32,9 +33,23 @@ struct PixelBox {
 struct ProjectedMesh {
   std::vector<Eigen::Vector3d> cam;
   std::vector<Eigen::Vector2d> px;
-  void reserve(const Mesh& mesh) {
+  // Where reserved for the image's rows: in each row of render_depth_in_box's box, columns that
+  // hold every pixel it drew there (first > last where none), so that a loop over the render may
+  // skip the rest of the box.
+  std::vector<int> row_first, row_last;
+  void reserve(const Mesh& mesh, int image_rows = 0) {
     cam.assign(mesh.vertices.size(), Eigen::Vector3d::Zero());
     px.assign(mesh.vertices.size(), Eigen::Vector2d::Zero());
+    row_first.assign(std::size_t(image_rows), 0);
+    row_last.assign(std::size_t(image_rows), -1);
+  }
+  // Whether the drawn columns are kept for an image of `height` rows.
+  bool has_rows(int height) const { return int(row_first.size()) >= height; }
+  // The columns of row y of `box` holding every pixel the last render drew there: those kept
+  // (first > last where none), else the box's whole row.
+  std::pair<int, int> drawn_columns(const PixelBox& box, int y, int height) const {
+    if (!has_rows(height)) return {box.x0, box.x1};
+    return {row_first[std::size_t(y)], row_last[std::size_t(y)]};
   }
 };
 
