@@ -112,11 +112,11 @@ TEST(Verification, ATriangleDrawsExactlyThePixelCentresInsideIt) {
 TEST(Verification, TheDrawnColumnsHoldEveryPixelDrawn) {
   Intrinsics k;
   k.width = 640, k.height = 480, k.fx = k.fy = 570, k.cx = 320, k.cy = 240;
-  Image<float> z(k.width, k.height, 0.0f), depth(k.width, k.height, 900.0f);
+  Image<float> z(k.width, k.height, 0.0f), depth(k.width, k.height, 0.0f);
   const PipeModel straight = pipe_of("S600", 30, "straight");
   for (const PipeModel* pipe : {&preset_model("u"), &straight}) {
     const PipeModel& model = *pipe;
-    const std::string& preset = model.source;
+    const std::string& name = model.source;
     const Mesh welded = weld_vertices(model.mesh, model.tube_diameter_mm / 8);
     ProjectedMesh rows, no_rows;
     rows.reserve(welded, k.height);
@@ -136,16 +136,29 @@ TEST(Verification, TheDrawnColumnsHoldEveryPixelDrawn) {
             ++drawn;
             outside += x < rows.row_first[std::size_t(y)] || x > rows.row_last[std::size_t(y)];
           }
-      EXPECT_EQ(outside, 0) << preset << " " << turn.transpose();
-      const Verification a = verify_pose(welded, Winding::open, pose, depth, k, 7, 10, 2, &z, &rows);
-      const Verification b = verify_pose(welded, Winding::open, pose, depth, k, 7, 10, 2, &z, &no_rows);
+      EXPECT_EQ(outside, 0) << name << " " << turn.transpose();
+      // The image: the pipe as drawn in the box's upper half, seen through in its lower half, and
+      // a floor 1200 mm away around it.
+      for (int y = 0; y < k.height; ++y)
+        for (int x = 0; x < k.width; ++x)
+          depth.at(x, y) = z.at(x, y) > 0 ? z.at(x, y) + (2 * y > box.y0 + box.y1 ? 20.0f : 0.0f) : 1200.0f;
+      const int hole_side = 3;
+      const Verification a =
+          verify_pose(welded, Winding::open, pose, depth, k, 7, 10, 2, &z, &rows, hole_side);
+      const Verification b =
+          verify_pose(welded, Winding::open, pose, depth, k, 7, 10, 2, &z, &no_rows, hole_side);
+      EXPECT_GT(a.agree_px, 0) << name;
+      EXPECT_GT(a.free_space_px, 0) << name;
       EXPECT_EQ(a.model_px, b.model_px);
+      EXPECT_EQ(a.inner_px, b.inner_px);
       EXPECT_EQ(a.agree_px, b.agree_px);
       EXPECT_EQ(a.free_space_px, b.free_space_px);
+      EXPECT_EQ(a.inner_free_space_px, b.inner_free_space_px);
       EXPECT_EQ(a.side_px, b.side_px);
       EXPECT_EQ(a.side_level_px, b.side_level_px);
+      EXPECT_EQ(a.seen_through_patch, b.seen_through_patch);
     }
-    EXPECT_GT(drawn, 3000) << preset;
+    EXPECT_GT(drawn, 3000) << name;
   }
 }
 

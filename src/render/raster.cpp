@@ -17,15 +17,17 @@ constexpr double kRowEdgeMinRise = 1e-6;
 // more than it saves.
 constexpr int kSpanMinWidthPx = 8;
 
+// A scan's rows not wanted (on_row below).
+struct NoRows {
+  void operator()(int, int, int) const {}
+};
+
 // Visits the integer pixel centres inside the screen triangle s0 s1 s2 (either winding).
 // A wide triangle's rows are scanned only over the span where the three edges' tests can hold (a
 // long thin triangle lying across the image would otherwise be tested over its whole bounding
 // box); the span is widened by a pixel each way, and every pixel in it takes the exact test, so
 // the pixels visited are those of the test over the box. on_row(y, first, last) is told, once per
 // row scanned, the columns scanned there (every pixel visited in the row lies among them).
-struct NoRows {
-  void operator()(int, int, int) const {}
-};
 template <typename Visit, typename OnRow = NoRows>
 void scan_triangle(const Eigen::Vector2d& s0, const Eigen::Vector2d& s1, const Eigen::Vector2d& s2, int width,
                    int height, Visit visit, OnRow on_row = {}) {
