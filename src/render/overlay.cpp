@@ -39,8 +39,12 @@ Image<Rgb> shade_depth(const Image<float>& depth, DepthShade shade) {
   for (std::size_t i = 0; i < depth.pixels.size(); ++i) {
     if (!(depth.pixels[i] > 0)) continue;
     const float t = (depth.pixels[i] - near) / (far - near);
+    if (shade == DepthShade::rainbow) {
+      out.pixels[i] = ramp(t);
+      continue;
+    }
     const auto g = std::uint8_t(235 - 195 * std::clamp(t, 0.0f, 1.0f));
-    out.pixels[i] = shade == DepthShade::rainbow ? ramp(t) : Rgb{g, g, g};
+    out.pixels[i] = {g, g, g};
   }
   return out;
 }
