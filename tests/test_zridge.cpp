@@ -4,6 +4,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <random>
 
 #include "locate/locator.hpp"
@@ -62,6 +63,63 @@ TEST(ZRidge, BinnedFourAtATimeAsOneAtATime) {
     EXPECT_GT(n, int(extent / 2 / 4)) << "extent " << extent;
     for (int i = 0; i < n; ++i) ASSERT_EQ(a[std::size_t(i)], b[std::size_t(i)]) << "extent " << extent;
   }
+}
+
+// The ridge read off the grid equals one read cell by cell from a plain map of the cells: per line
+// across the axis, per run of occupied cells (one empty cell allowed), the highest point, where it
+// is neither end of its run. Seven tubes side by side, a row spanning three 64-cell words of the
+// occupied bits, runs across the words' borders, holes; the axis along x, so that the points' own
+// coordinates are the grid's.
+TEST(ZRidge, EveryRunOfEveryLineAsReadCellByCell) {
+  const float cell = 2.0f, min_run = 6.0f;
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> u(0, 1);
+  std::vector<Eigen::Vector3f> pts;
+  for (int tube = 0; tube < 7; ++tube) {
+    const float radius = 6.0f + 2.0f * float(tube), y0 = 45.0f * float(tube);
+    for (int k = 0; k < 6000; ++k) {
+      const float x = 300 * u(rng), a = float(M_PI) * u(rng);
+      if (std::abs(x - 40 * float(tube + 1)) < 8) continue;  // a hole across the tube
+      pts.emplace_back(x, y0 + radius * std::cos(a), 400 + 5 * float(tube) + radius * std::sin(a));
+    }
+  }
+  RidgeBuffers rb;
+  reserve_ridge(&rb, 400, cell, int(pts.size()));
+  std::vector<Eigen::Vector3f> ridge(4000);
+  const int n = extract_zridge(pts.data(), int(pts.size()), Eigen::Vector2f(1, 0), cell, min_run, &rb,
+                               ridge.data(), int(ridge.size()));
+
+  float u0 = 1e30f, v0 = 1e30f, u1 = -1e30f, v1 = -1e30f;
+  for (const auto& p : pts)
+    u0 = std::min(u0, p.x()), v0 = std::min(v0, p.y()), u1 = std::max(u1, p.x()), v1 = std::max(v1, p.y());
+  const float inv = 1.0f / cell;
+  const int rows = int((u1 - u0) / cell) + 1, cols = int((v1 - v0) / cell) + 1;
+  ASSERT_GT(cols, 128) << "the rows should span three words";
+  std::map<std::pair<int, int>, int> top;  // (row, column) -> the first highest point's index
+  for (int k = 0; k < int(pts.size()); ++k) {
+    const int r = int((pts[std::size_t(k)].x() - u0) * inv), c = int((pts[std::size_t(k)].y() - v0) * inv);
+    const auto it = top.find({r, c});
+    if (it == top.end() || pts[std::size_t(k)].z() > pts[std::size_t(it->second)].z()) top[{r, c}] = k;
+  }
+  std::vector<Eigen::Vector3f> expected;
+  for (int r = 0; r < rows; ++r) {
+    std::vector<std::pair<int, int>> line;  // (column, point) of the occupied cells, in order
+    for (auto it = top.lower_bound({r, 0}); it != top.end() && it->first.first == r; ++it)
+      line.emplace_back(it->first.second, it->second);
+    for (std::size_t a = 0; a < line.size();) {
+      std::size_t b = a, best = a;
+      while (b + 1 < line.size() && line[b + 1].first - line[b].first <= 2) {
+        ++b;
+        if (pts[std::size_t(line[b].second)].z() > pts[std::size_t(line[best].second)].z()) best = b;
+      }
+      if (line[b].first - line[a].first + 1 >= int(min_run / cell) && best != a && best != b)
+        expected.push_back(pts[std::size_t(line[best].second)]);
+      a = b + 1;
+    }
+  }
+  ASSERT_EQ(n, int(expected.size()));
+  EXPECT_GT(n, 7 * 100) << "a ridge point per line of each tube, less the holes";
+  for (int i = 0; i < n; ++i) ASSERT_EQ(ridge[std::size_t(i)], expected[std::size_t(i)]) << "point " << i;
 }
 
 // The model's samples by coordinate (four at a time) give the same ridge, point for point, as the

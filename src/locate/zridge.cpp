@@ -16,8 +16,8 @@ void reserve_ridge(RidgeBuffers* rb, float max_extent_mm, float cell_mm, int max
   rb->cols = rb->rows = int(std::ceil(max_extent_mm / cell_mm)) + 2;
   rb->top_z.assign(std::size_t(rb->cols) * rb->rows, -std::numeric_limits<float>::infinity());
   rb->top_i.assign(std::size_t(rb->cols) * rb->rows, 0);
-  rb->row_lo.assign(std::size_t(rb->rows), 0);
-  rb->row_hi.assign(std::size_t(rb->rows), 0);
+  rb->row_words = (rb->cols + 63) / 64;
+  rb->occupied_bits.assign(std::size_t(rb->rows) * rb->row_words, 0);
   rb->occupied.assign(std::size_t(rb->cols), 0);
   rb->occupied_z.assign(std::size_t(rb->cols), 0.0f);
 }
@@ -167,13 +167,13 @@ int extract_zridge(const PosedPoints& pts, const Eigen::Vector2f& axis, float ce
   const int rows = std::min(rb->rows, int((span.u1 - u0) / cell) + 1);
   const int cols = std::min(rb->cols, int((span.v1 - v0) / cell) + 1);
   constexpr float kNone = -std::numeric_limits<float>::infinity();
-  // Only the occupied span of each row is visited, and emptied again before returning: a tube
-  // fills a band of the grid, not the grid.
-  std::fill_n(rb->row_lo.begin(), rows, cols);
-  std::fill_n(rb->row_hi.begin(), rows, -1);
+  // Only the occupied cells are visited, by their bits, and emptied again before returning: a
+  // tube fills a band of the grid, not the grid.
   const float inv_cell = 1.0f / cell;
   float* top_z = rb->top_z.data();
-  int *top_i = rb->top_i.data(), *row_lo = rb->row_lo.data(), *row_hi = rb->row_hi.data();
+  int* top_i = rb->top_i.data();
+  const int row_words = rb->row_words;
+  std::uint64_t* bits = rb->occupied_bits.data();
   // Branch-free: whether a point tops its cell is as good as random.
   const auto bin_cell = [&](int r_, int c, float z, int k) {
     const std::size_t cell_index = std::size_t(r_) * cols + c;
@@ -181,8 +181,7 @@ int extract_zridge(const PosedPoints& pts, const Eigen::Vector2f& axis, float ce
     const int higher = -int(z > old_z);  // all ones or zero
     top_z[cell_index] = std::max(old_z, z);
     top_i[cell_index] = (k & higher) | (top_i[cell_index] & ~higher);
-    row_lo[r_] = std::min(row_lo[r_], c);
-    row_hi[r_] = std::max(row_hi[r_], c);
+    bits[std::size_t(r_) * row_words + std::size_t(c >> 6)] |= std::uint64_t(1) << (c & 63);
   };
   const auto bin = [&](float u, float v, float z, int k) {
     const int r_ = int((u - u0) * inv_cell);
@@ -233,25 +232,27 @@ int extract_zridge(const PosedPoints& pts, const Eigen::Vector2f& axis, float ce
   const int min_run = std::max(1, int(min_run_mm / cell));
   int* occupied = rb->occupied.data();
   float* occupied_z = rb->occupied_z.data();
+  const int words = (cols + 63) / 64;
   for (int r_ = 0; r_ < rows; ++r_) {
     const std::size_t row0 = std::size_t(r_) * cols;
     float* zr = &rb->top_z[row0];
-    const int lo = row_lo[r_], hi = row_hi[r_];
+    std::uint64_t* row_bits = bits + std::size_t(r_) * row_words;
+    // The occupied cells of the row, in order, and their heights, listed while the row is emptied.
+    int m = 0;
+    for (int w = 0; w < words; ++w) {
+      for (std::uint64_t b = row_bits[w]; b != 0; b &= b - 1) {
+        const int c = w * 64 + __builtin_ctzll(b);
+        const float z = zr[c];  // still none where only a point of no height (NaN) fell
+        occupied[m] = c, occupied_z[m] = z, m += z != kNone;
+        zr[c] = kNone;
+      }
+      row_bits[w] = 0;
+    }
     if (whole_surface) {
-      for (int c = lo; c <= hi && n < capacity; ++c)
-        if (zr[c] != kNone) out[n++] = emit(row0 + c);
-      if (lo <= hi) std::fill(zr + lo, zr + hi + 1, kNone);
+      for (int a = 0; a < m && n < capacity; ++a) out[n++] = emit(row0 + occupied[a]);
       continue;
     }
-    // The occupied cells of the row and their heights, listed without branches while the row is
-    // emptied; runs are then found on the list, where a run's end is one test per occupied cell
-    // instead of two or three per cell.
-    int m = 0;
-    for (int c = lo; c <= hi; ++c) {
-      const float z = zr[c];
-      occupied[m] = c, occupied_z[m] = z, m += z != kNone;
-      zr[c] = kNone;
-    }
+    // Runs are found on the list, where a run's end is one test per occupied cell.
     for (int a = 0; a < m && n < capacity;) {
       // A run tolerates one empty cell (sampling gaps): occupied cells at most two apart.
       int best = a, b = a;

@@ -2,6 +2,7 @@
 // line across the axis: per line and per run of occupied cells, the highest point.
 #pragma once
 
+#include <cstdint>
 #include <vector>
 
 #include "core/pose.hpp"
@@ -12,7 +13,8 @@ struct RidgeBuffers {
   int cols = 0, rows = 0;           // capacity of the axis-aligned grid
   std::vector<float> top_z;         // per cell: highest z; -inf (empty) between calls
   std::vector<int> top_i;           // per cell: the index of that point
-  std::vector<int> row_lo, row_hi;  // per row: first and last occupied column of this call
+  int row_words = 0;                // 64-bit words of occupied bits per row
+  std::vector<std::uint64_t> occupied_bits;  // per row: a bit per occupied column; 0 between calls
   std::vector<int> occupied;        // the occupied columns of the row being scanned
   std::vector<float> occupied_z;    // and their highest z
   int max_points = 0;               // points taken that the columns below hold
