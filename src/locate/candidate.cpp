@@ -26,26 +26,29 @@ constexpr float kExplainedMinAgreementShare = 0.8f;
 // Beyond the paper: the observed points a verified pose explains (its rendered silhouette, depth
 // within the tolerance), in the bin frame, evenly thinned to the buffer's capacity: the whole
 // pipe the image shows, where the region held only its top strip. `rendered` holds the depths
-// verify_pose() drew in v.box. Returns how many.
-int explained_points(const CandidateContext& ctx, const Image<float>& rendered, const Verification& v, float tol,
-                     std::vector<Eigen::Vector3f>* out) {
-  const int x0 = v.box.x0, y0 = v.box.y0, x1 = v.box.x1, y1 = v.box.y1;
+// verify_pose() drew in v.box, `drawn` that render's columns. Returns how many.
+int explained_points(const CandidateContext& ctx, const Image<float>& rendered, const ProjectedMesh& drawn,
+                     const Verification& v, float tol, std::vector<Eigen::Vector3f>* out) {
   const auto explained = [&](int x, int y) {
     const float zm = rendered.at(x, y), zo = ctx.depth.at(x, y);
     return zm > 0 && zo > 0 && std::abs(zo - zm) <= tol;
   };
   int count = 0;
-  for (int y = y0; y <= y1; ++y)
-    for (int x = x0; x <= x1; ++x) count += explained(x, y);
+  for (int y = v.box.y0; y <= v.box.y1; ++y) {
+    const auto [from, to] = drawn.drawn_columns(v.box, y, rendered.height);
+    for (int x = from; x <= to; ++x) count += explained(x, y);
+  }
   const int capacity = int(out->size());
   const int stride = count / std::max(1, capacity) + 1;
   const Pose cam_to_bin = ctx.bin_to_cam.inverse();
   int seen = 0, n = 0;
-  for (int y = y0; y <= y1; ++y)
-    for (int x = x0; x <= x1; ++x) {
+  for (int y = v.box.y0; y <= v.box.y1; ++y) {
+    const auto [from, to] = drawn.drawn_columns(v.box, y, rendered.height);
+    for (int x = from; x <= to; ++x) {
       if (!explained(x, y) || seen++ % stride != 0 || n >= capacity) continue;
       (*out)[std::size_t(n++)] = (cam_to_bin * ctx.camera.unproject(x, y, ctx.depth.at(x, y))).cast<float>();
     }
+  }
   return n;
 }
 
@@ -682,8 +685,8 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
     // (the region holds only its top strip, along which a leg can slide); kept if judged better.
     if (cfg.refine_on_explained &&
         e.check.agreement() >= kExplainedMinAgreementShare * float(cfg.verify_min_agreement)) {
-      const int n = explained_points(ctx, buf->scratch_depth, e.check, float(cfg.verify_tolerance_mm),
-                                     &buf->explained_pts);
+      const int n = explained_points(ctx, buf->scratch_depth, buf->scratch_mesh, e.check,
+                                     float(cfg.verify_tolerance_mm), &buf->explained_pts);
       if (n >= kMinExplainedPoints) {
         buf->times.verify_ms += ms_since(t0);
         t0 = Clock::now();
@@ -760,8 +763,8 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
   const auto explained_by_best = [&] {
     const auto t0 = Clock::now();
     const Verification v = verify_at(best.model_to_cam);
-    const int n =
-        explained_points(ctx, buf->scratch_depth, v, float(cfg.verify_tolerance_mm), &buf->found_pts);
+    const int n = explained_points(ctx, buf->scratch_depth, buf->scratch_mesh, v,
+                                   float(cfg.verify_tolerance_mm), &buf->found_pts);
     buf->times.verify_ms += ms_since(t0);
     return n < kMinExplainedPoints ? 0 : n;
   };
