@@ -162,6 +162,35 @@ TEST(Verification, TheDrawnColumnsHoldEveryPixelDrawn) {
   }
 }
 
+// A pose whose pipe lies wholly beside the image, level with its rows, draws nothing: its
+// verification reads no pixel, whatever earlier renders left in the scratch image and its rows
+// (such a pose once read a pipe rendered before it: agreement 0.78 or 0.43 by the order in which
+// the threads had taken the candidates, on a zoo arc).
+TEST(Verification, APipeBesideTheImageReadsNothingLeftByAnEarlierRender) {
+  Intrinsics k;
+  k.width = 640, k.height = 480, k.fx = k.fy = 570, k.cx = 320, k.cy = 240;
+  const PipeModel& model = preset_model("u");
+  const Mesh welded = weld_vertices(model.mesh, model.tube_diameter_mm / 8);
+  Image<float> z(k.width, k.height, 0.0f), depth(k.width, k.height, 0.0f);
+  ProjectedMesh rows;
+  rows.reserve(welded, k.height);
+  Pose seen = Pose::Identity();
+  seen.translation() = Eigen::Vector3d(0, 0, 900) - model.centroid.cast<double>();
+  ASSERT_FALSE(render_depth_in_box(welded, seen, k, &depth, &rows).empty());  // the image: the pipe
+  const Verification first = verify_pose(welded, Winding::open, seen, depth, k, 7, 10, 2, &z, &rows);
+  ASSERT_GT(first.agree_px, 1000);
+  for (const double x_mm : {-2000.0, 2000.0}) {
+    Pose beside = seen;
+    beside.translation().x() += x_mm;  // the same rows, left or right of the image
+    const Verification v = verify_pose(welded, Winding::open, beside, depth, k, 7, 10, 2, &z, &rows);
+    EXPECT_TRUE(v.box.empty()) << x_mm;
+    EXPECT_EQ(v.model_px, 0) << x_mm;
+    EXPECT_EQ(v.agree_px, 0) << x_mm;
+    EXPECT_EQ(v.side_px, 0) << x_mm;
+    EXPECT_EQ(v.agreement(), 0.0f) << x_mm;
+  }
+}
+
 // A pixel without a reading (a sensor's shadow, a specular hole) is neither for nor against a
 // pose: counted apart, neither agreeing nor free space nor in front.
 TEST(Verification, PixelsWithoutAReadingAreCountedApart) {

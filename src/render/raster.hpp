@@ -46,9 +46,10 @@ struct ProjectedMesh {
   // Whether the drawn columns are kept for an image of `height` rows.
   bool has_rows(int height) const { return int(row_first.size()) >= height; }
   // The columns of row y of `box` holding every pixel the last render drew there: those kept
-  // (first > last where none), else the box's whole row.
+  // (first > last where none), else the box's whole row. An empty box (a mesh beside the image,
+  // its rows within the image's) drew nothing and kept no row: none.
   std::pair<int, int> drawn_columns(const PixelBox& box, int y, int height) const {
-    if (!has_rows(height)) return {box.x0, box.x1};
+    if (!has_rows(height) || box.empty()) return {box.x0, box.x1};
     return {row_first[std::size_t(y)], row_last[std::size_t(y)]};
   }
 };
