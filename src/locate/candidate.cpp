@@ -26,7 +26,7 @@ constexpr float kExplainedMinAgreementShare = 0.8f;
 // Beyond the paper: the observed points a verified pose explains (its rendered silhouette, depth
 // within the tolerance), in the bin frame, evenly thinned to the buffer's capacity: the whole
 // pipe the image shows, where the region held only its top strip. `rendered` holds the depths
-// verify_pose() drew in v.box, `drawn` that render's columns. Returns how many.
+// verify_pose() drew in v.box, and `drawn` the columns that render kept. Returns how many.
 int explained_points(const CandidateContext& ctx, const Image<float>& rendered, const ProjectedMesh& drawn,
                      const Verification& v, float tol, std::vector<Eigen::Vector3f>* out) {
   const auto explained = [&](int x, int y) {

@@ -10,16 +10,16 @@
 namespace pipeloc {
 
 struct RidgeBuffers {
-  int cols = 0, rows = 0;           // capacity of the axis-aligned grid
-  std::vector<float> top_z;         // per cell: highest z; -inf (empty) between calls
-  std::vector<int> top_i;           // per cell: the index of that point
-  int row_words = 0;                // 64-bit words of occupied bits per row
+  int cols = 0, rows = 0;                    // capacity of the axis-aligned grid
+  std::vector<float> top_z;                  // per cell: highest z; -inf (empty) between calls
+  std::vector<int> top_i;                    // per cell: the index of that point
+  int row_words = 0;                         // 64-bit words of occupied bits per row
   std::vector<std::uint64_t> occupied_bits;  // per row: a bit per occupied column; 0 between calls
-  std::vector<int> occupied;        // the occupied columns of the row being scanned
-  std::vector<float> occupied_z;    // and their highest z
-  int max_points = 0;               // points taken that the columns below hold
-  std::vector<float> u, v, z;       // per point taken: along and across the axis, and height
-  std::vector<int> index;           // per point taken: its index in the input
+  std::vector<int> occupied;                 // the occupied columns of the row being scanned
+  std::vector<float> occupied_z;             // and their highest z
+  int max_points = 0;                        // points taken that the columns below hold
+  std::vector<float> u, v, z;                // per point taken: along and across the axis, and height
+  std::vector<int> index;                    // per point taken: its index in the input
 };
 
 // Runs of ridge points narrower than this share of D are noise or a pipe's end, not its ridge.
