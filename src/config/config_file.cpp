@@ -238,6 +238,7 @@ void read_locate(Section& s, LocateConfig* c) {
   s.boolean("refine_on_explained", &c->refine_on_explained);
   s.boolean("polish_best", &c->polish_best);
   s.boolean("refine_facing_only", &c->refine_facing_only);
+  s.boolean("refine_ray_pairs", &c->refine_ray_pairs);
   s.real("verify_tolerance_mm", &c->verify_tolerance_mm, 0, 100, "mm (0: derived)");
   s.real("verify_min_agreement", &c->verify_min_agreement, 0, 1, "share");
   s.real("verify_min_read_share", &c->verify_min_read_share, 0, 1, "share");

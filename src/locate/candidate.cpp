@@ -641,10 +641,9 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
     return pick_distance_mm(lm, a.model_to_bin, b.model_to_bin, ambiguity_mm) > ambiguity_mm &&
            shared_tube(lm, a.model_to_bin, b.model_to_bin) >= kRivalMinSharedTube;
   };
-  // Beyond the paper: points pair with the model surface that faces the camera (refine_facing_only).
-  const Eigen::Vector3f camera_bin =
-      cfg.refine_facing_only ? Eigen::Vector3f(ctx.bin_to_cam.inverse().translation().cast<float>())
-                             : Eigen::Vector3f::Constant(NAN);
+  // Beyond the paper: the refinement reads points as the camera saw them (refine_facing_only,
+  // refine_ray_pairs).
+  const Eigen::Vector3f camera_bin = ctx.bin_to_cam.inverse().translation().cast<float>();
   // The image's reading of a pose's ends, and how much of it lies below the floor.
   EndReading end_reading;
   end_reading.tip_must_show = lm.slides.empty();

@@ -63,6 +63,27 @@ Pose canonical_start(const PipeModel& model, const Eigen::Matrix3d& rotation, co
   return to_canonical * lying;
 }
 
+// The tube's direction at a surface point p of outward normal n: the step of the centreline (ordered
+// by arc length) nearest the point's centre, p moved D/2 inwards, made square to n. Zero where
+// there is no centreline or it lies further than D/2 from that centre (an end cap's face).
+Eigen::Vector3f tube_direction_at(const std::vector<Eigen::Vector3f>& line, const Eigen::Vector3f& p,
+                                  const Eigen::Vector3f& n, float tube_d_mm) {
+  if (line.size() < 2) return Eigen::Vector3f::Zero();
+  const Eigen::Vector3f centre = p - 0.5f * tube_d_mm * n;
+  std::size_t best = 0;
+  float best_d2 = 1e30f;
+  for (std::size_t i = 0; i < line.size(); ++i) {
+    const float d2 = (line[i] - centre).squaredNorm();
+    if (d2 < best_d2) best_d2 = d2, best = i;
+  }
+  if (best_d2 > 0.25f * tube_d_mm * tube_d_mm) return Eigen::Vector3f::Zero();
+  const std::size_t i0 = best == 0 ? 0 : best - 1, i1 = std::min(line.size() - 1, best + 1);
+  Eigen::Vector3f a = line[i1] - line[i0];
+  a -= a.dot(n) * n;
+  const float len = a.norm();
+  return len > 1e-6f ? Eigen::Vector3f(a / len) : Eigen::Vector3f::Zero();
+}
+
 }  // namespace
 
 LocatorModel prepare_locator_model(const PipeModel& model, float margin_mm, const LocateConfig& cfg) {
@@ -169,6 +190,9 @@ LocatorModel prepare_locator_model(const PipeModel& model, float margin_mm, cons
     if (number[s] < 0) continue;
     number[s] = int(lm.samples.size());
     lm.samples.push_back({pts[s], model.surface.normals[s]});
+    if (cfg.refine_ray_pairs)
+      lm.sample_directions.push_back(
+          tube_direction_at(centreline.points, pts[s], model.surface.normals[s], lm.tube_d_mm));
   }
   // PipeModel caps its samples well below this; a larger model must not wrap the index around.
   if (lm.samples.size() >= LocatorModel::kNoSample)

@@ -90,6 +90,10 @@ struct LocatorModel {
   int nx = 0, ny = 0, nz = 0;
   std::vector<std::uint16_t> voxel_sample;  // into samples
   std::vector<Sample> samples;              // those some voxel names, in surface-sample order
+  // Per sample, the tube's direction there (unit, square to n; the centreline's nearest step),
+  // zero where no centreline was found: the tube round a sample read as a cylinder. Only with
+  // refine_ray_pairs (else empty); beside the samples, not in them: the look-ups stay as small.
+  std::vector<Eigen::Vector3f> sample_directions;
 
   const Sample* nearest_sample(const Eigen::Vector3f& p_model) const {
     const Eigen::Vector3f g = (p_model - voxel_origin) / voxel_mm;

@@ -26,13 +26,47 @@ constexpr int kMinInliers = 12;
 // the surface the camera sees").
 constexpr double kDamping = 1e-3;
 
+// Where the ray from `eye` through q first meets the cylinder of `radius` round a sample's tube
+// (its axis through the sample's centre, along its direction `dir`), if it does so within `reach`
+// of q and within a radius of the sample along the tube: *partner and its outward *normal. A
+// point's depth noise lies along that ray, so it lies before or behind that partner by the noise
+// alone; the nearest sample instead moves up the tube's side with a noisy point, and on a thin
+// tube the fit then sits nearer the camera (docs/experiments.md, "Points paired along the
+// camera's rays").
+bool ray_meets_tube(const Eigen::Vector3f& eye, const Eigen::Vector3f& q, const LocatorModel::Sample& s,
+                    const Eigen::Vector3f& dir, float radius, float reach, Eigen::Vector3f* partner,
+                    Eigen::Vector3f* normal) {
+  if (dir.isZero()) return false;
+  const Eigen::Vector3f centre = s.p - radius * s.n;
+  const Eigen::Vector3f d = (q - eye).normalized();
+  const Eigen::Vector3f w = eye - centre;
+  const Eigen::Vector3f dp = d - d.dot(dir) * dir, wp = w - w.dot(dir) * dir;
+  const float qa = dp.squaredNorm(), qb = 2 * wp.dot(dp), qc = wp.squaredNorm() - radius * radius;
+  const float disc = qb * qb - 4 * qa * qc;
+  if (qa < 1e-12f || disc < 0) return false;
+  const float t = (-qb - std::sqrt(disc)) / (2 * qa);  // the nearer meeting: the side it faces
+  const Eigen::Vector3f hit = eye + t * d;
+  const Eigen::Vector3f off = hit - centre;
+  const float along = off.dot(dir);
+  if (std::abs(along) > radius || (hit - q).squaredNorm() > reach * reach) return false;
+  *partner = hit;
+  *normal = (off - along * dir) / radius;
+  return true;
+}
+
 }  // namespace
 
 RefineResult refine_on_surface(const LocatorModel& lm, const Pose& start, const Eigen::Vector3f* obs, int n,
                                const LocateConfig& cfg, const Eigen::Vector3f& camera_bin) {
   RefineResult res;
   const bool slides = !lm.straight && !lm.slides.empty();  // an arc or a coil
-  const bool facing_only = camera_bin.allFinite() && lm.slides.empty();
+  const bool camera_known = camera_bin.allFinite();
+  const bool facing_only = cfg.refine_facing_only && camera_known && lm.slides.empty();
+  // Not for a pipe that slides along itself either: on seed 20's 03-elbow of the zoo it gave 4
+  // wrong picks while clearing one bin (docs/experiments.md).
+  const bool by_rays = cfg.refine_ray_pairs && camera_known && lm.slides.empty() &&
+                       lm.sample_directions.size() == lm.samples.size();
+  const float radius = 0.5f * lm.tube_d_mm;
   res.pose = start;
   const float inlier = float(cfg.refine_inlier_mm);
   // Coarse to fine: all but the last kFineIterations use every third point; the last (and the
@@ -45,6 +79,7 @@ RefineResult refine_on_surface(const LocatorModel& lm, const Pose& start, const 
     const Eigen::Vector3f t = res.pose.translation().cast<float>();
     const Eigen::Matrix3f rt = r.transpose();
     const Eigen::Vector3f c = r * lm.centroid + t;  // linearise about the model's centroid
+    const Eigen::Vector3f camera_model = rt * (camera_bin - t);
     Eigen::Matrix<double, 6, 6> a = Eigen::Matrix<double, 6, 6>::Zero();
     Eigen::Matrix<double, 6, 1> b = Eigen::Matrix<double, 6, 1>::Zero();
     int inliers = 0;
@@ -64,11 +99,18 @@ RefineResult refine_on_surface(const LocatorModel& lm, const Pose& start, const 
         const Eigen::Vector3f& q = batch_q[k];
         const LocatorModel::Sample* s = batch_s[k];
         if (!s) continue;
-        const Eigen::Vector3f diff = q - s->p;
-        if (diff.squaredNorm() > inlier * inlier) continue;
-        const Eigen::Vector3f nw = r * s->n;
-        const Eigen::Vector3f pw = r * s->p + t;  // the model point in the bin frame
-        if (facing_only) {  // n . v < -slack |v|, v from the sample to the camera, without a root
+        if ((q - s->p).squaredNorm() > inlier * inlier) continue;
+        // The partner: where the camera's ray through q meets the tube round the sample, else the
+        // sample.
+        Eigen::Vector3f partner = s->p, normal = s->n;
+        bool on_ray = false;
+        if (by_rays)
+          on_ray = ray_meets_tube(camera_model, q, *s, lm.sample_directions[std::size_t(s - lm.samples.data())],
+                                  radius, inlier, &partner, &normal);
+        const Eigen::Vector3f diff = q - partner;
+        const Eigen::Vector3f nw = r * normal;
+        const Eigen::Vector3f pw = r * partner + t;  // the model point in the bin frame
+        if (facing_only && !on_ray) {  // n . v < -slack |v|, v from the sample to the camera, without a root
           const Eigen::Vector3f v = camera_bin - pw;
           const float nv = nw.dot(v);
           if (nv < 0 && nv * nv > kFacingSlack * kFacingSlack * v.squaredNorm()) continue;
