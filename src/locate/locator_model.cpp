@@ -65,7 +65,8 @@ Pose canonical_start(const PipeModel& model, const Eigen::Matrix3d& rotation, co
 
 // The tube's direction at a surface point p of outward normal n: the step of the centreline (ordered
 // by arc length) nearest the point's centre, p moved D/2 inwards, made square to n. Zero where
-// there is no centreline or it lies further than D/2 from that centre (an end cap's face).
+// there is no centreline, where it lies further than D/2 from that centre, or where n is not
+// square to the step within 45 degrees: not the tube's side (an end cap's face).
 Eigen::Vector3f tube_direction_at(const std::vector<Eigen::Vector3f>& line, const Eigen::Vector3f& p,
                                   const Eigen::Vector3f& n, float tube_d_mm) {
   if (line.size() < 2) return Eigen::Vector3f::Zero();
@@ -78,10 +79,10 @@ Eigen::Vector3f tube_direction_at(const std::vector<Eigen::Vector3f>& line, cons
   }
   if (best_d2 > 0.25f * tube_d_mm * tube_d_mm) return Eigen::Vector3f::Zero();
   const std::size_t i0 = best == 0 ? 0 : best - 1, i1 = std::min(line.size() - 1, best + 1);
-  Eigen::Vector3f a = line[i1] - line[i0];
-  a -= a.dot(n) * n;
+  const Eigen::Vector3f step = line[i1] - line[i0];
+  const Eigen::Vector3f a = step - step.dot(n) * n;
   const float len = a.norm();
-  return len > 1e-6f ? Eigen::Vector3f(a / len) : Eigen::Vector3f::Zero();
+  return len > std::sqrt(0.5f) * step.norm() && len > 1e-6f ? Eigen::Vector3f(a / len) : Eigen::Vector3f::Zero();
 }
 
 }  // namespace

@@ -62,8 +62,9 @@ RefineResult refine_on_surface(const LocatorModel& lm, const Pose& start, const 
   const bool slides = !lm.straight && !lm.slides.empty();  // an arc or a coil
   const bool camera_known = camera_bin.allFinite();
   const bool facing_only = cfg.refine_facing_only && camera_known && lm.slides.empty();
-  // Not for a pipe that slides along itself either: on seed 20's 03-elbow of the zoo it gave 4
-  // wrong picks while clearing one bin (docs/experiments.md).
+  // Not for a pipe that slides along itself either, which its ends place: for every pipe, a
+  // straight tube of the zoo (seed 20) was handed out 26 mm along its axis, and in one variant its
+  // elbows 4 times wrong while clearing one bin (docs/experiments.md).
   const bool by_rays = cfg.refine_ray_pairs && camera_known && lm.slides.empty() &&
                        lm.sample_directions.size() == lm.samples.size();
   const float radius = 0.5f * lm.tube_d_mm;
