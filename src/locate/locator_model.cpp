@@ -82,7 +82,8 @@ Eigen::Vector3f tube_direction_at(const std::vector<Eigen::Vector3f>& line, cons
   const Eigen::Vector3f step = line[i1] - line[i0];
   const Eigen::Vector3f a = step - step.dot(n) * n;
   const float len = a.norm();
-  return len > std::sqrt(0.5f) * step.norm() && len > 1e-6f ? Eigen::Vector3f(a / len) : Eigen::Vector3f::Zero();
+  return len > std::sqrt(0.5f) * step.norm() && len > 1e-6f ? Eigen::Vector3f(a / len)
+                                                            : Eigen::Vector3f::Zero();
 }
 
 }  // namespace

@@ -106,8 +106,9 @@ RefineResult refine_on_surface(const LocatorModel& lm, const Pose& start, const 
         Eigen::Vector3f partner = s->p, normal = s->n;
         bool on_ray = false;
         if (by_rays)
-          on_ray = ray_meets_tube(camera_model, q, *s, lm.sample_directions[std::size_t(s - lm.samples.data())],
-                                  radius, inlier, &partner, &normal);
+          on_ray =
+              ray_meets_tube(camera_model, q, *s, lm.sample_directions[std::size_t(s - lm.samples.data())],
+                             radius, inlier, &partner, &normal);
         const Eigen::Vector3f diff = q - partner;
         const Eigen::Vector3f nw = r * normal;
         const Eigen::Vector3f pw = r * partner + t;  // the model point in the bin frame
