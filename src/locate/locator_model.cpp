@@ -8,6 +8,7 @@
 
 #include "locate/locate_config.hpp"
 #include "locate/principal_axis.hpp"
+#include "model/neighbors.hpp"
 #include "model/slides.hpp"
 #include "render/raster.hpp"
 
@@ -63,21 +64,18 @@ Pose canonical_start(const PipeModel& model, const Eigen::Matrix3d& rotation, co
   return to_canonical * lying;
 }
 
-// The tube's direction at a surface point p of outward normal n: the step of the centreline (ordered
-// by arc length) nearest the point's centre, p moved D/2 inwards, made square to n. Zero where
-// there is no centreline, where it lies further than D/2 from that centre, or where n is not
-// square to the step within 45 degrees: not the tube's side (an end cap's face).
-Eigen::Vector3f tube_direction_at(const std::vector<Eigen::Vector3f>& line, const Eigen::Vector3f& p,
-                                  const Eigen::Vector3f& n, float tube_d_mm) {
-  if (line.size() < 2) return Eigen::Vector3f::Zero();
-  const Eigen::Vector3f centre = p - 0.5f * tube_d_mm * n;
-  std::size_t best = 0;
-  float best_d2 = 1e30f;
-  for (std::size_t i = 0; i < line.size(); ++i) {
-    const float d2 = (line[i] - centre).squaredNorm();
-    if (d2 < best_d2) best_d2 = d2, best = i;
-  }
-  if (best_d2 > 0.25f * tube_d_mm * tube_d_mm) return Eigen::Vector3f::Zero();
+// The tube's direction at a surface point p of outward normal n: the step of the centreline (`line`,
+// ordered by arc length; `index` over it) nearest the point's centre, p moved D/2 inwards, made
+// square to n. Zero where there is no centreline, where it lies further than D/2 from that
+// centre, or where n is not square to the step within 45 degrees: not the tube's side (an end
+// cap's face).
+Eigen::Vector3f tube_direction_at(const std::vector<Eigen::Vector3f>& line, const KdTree3& index,
+                                  const Eigen::Vector3f& p, const Eigen::Vector3f& n, float tube_d_mm) {
+  int nearest = -1;
+  float d2 = 0;
+  if (line.size() < 2 || !index.nearest_within(p - 0.5f * tube_d_mm * n, 0.5f * tube_d_mm, &nearest, &d2))
+    return Eigen::Vector3f::Zero();
+  const std::size_t best = std::size_t(nearest);
   const std::size_t i0 = best == 0 ? 0 : best - 1, i1 = std::min(line.size() - 1, best + 1);
   const Eigen::Vector3f step = line[i1] - line[i0];
   const Eigen::Vector3f a = step - step.dot(n) * n;
@@ -184,6 +182,8 @@ LocatorModel prepare_locator_model(const PipeModel& model, float margin_mm, cons
       voxel_sample[w] = s;
     }
   }
+  KdTree3 centreline_index;
+  if (cfg.refine_ray_pairs) centreline_index.build(centreline.points.data(), centreline.points.size());
   // Compacted: only the samples some voxel names, numbered in sample order.
   std::vector<int> number(pts.size(), -1);
   for (const int s : voxel_sample)
@@ -193,8 +193,8 @@ LocatorModel prepare_locator_model(const PipeModel& model, float margin_mm, cons
     number[s] = int(lm.samples.size());
     lm.samples.push_back({pts[s], model.surface.normals[s]});
     if (cfg.refine_ray_pairs)
-      lm.sample_directions.push_back(
-          tube_direction_at(centreline.points, pts[s], model.surface.normals[s], lm.tube_d_mm));
+      lm.sample_directions.push_back(tube_direction_at(centreline.points, centreline_index, pts[s],
+                                                       model.surface.normals[s], lm.tube_d_mm));
   }
   // PipeModel caps its samples well below this; a larger model must not wrap the index around.
   if (lm.samples.size() >= LocatorModel::kNoSample)

@@ -60,13 +60,13 @@ RefineResult refine_on_surface(const LocatorModel& lm, const Pose& start, const 
                                const LocateConfig& cfg, const Eigen::Vector3f& camera_bin) {
   RefineResult res;
   const bool slides = !lm.straight && !lm.slides.empty();  // an arc or a coil
-  const bool camera_known = camera_bin.allFinite();
-  const bool facing_only = cfg.refine_facing_only && camera_known && lm.slides.empty();
-  // Not for a pipe that slides along itself either, which its ends place: for every pipe, a
-  // straight tube of the zoo (seed 20) was handed out 26 mm along its axis, and in one variant its
-  // elbows 4 times wrong while clearing one bin (docs/experiments.md).
-  const bool by_rays = cfg.refine_ray_pairs && camera_known && lm.slides.empty() &&
-                       lm.sample_directions.size() == lm.samples.size();
+  // Points read as the camera saw them, but not for a pipe that slides along itself, which its
+  // ends place: there facing only cost an arc and a coil (surface_refine.hpp), and along the rays a
+  // straight tube of the zoo (seed 20) was handed out 26 mm along its axis and, in one variant,
+  // its elbows 4 times wrong while clearing one bin (docs/experiments.md).
+  const bool as_seen = camera_bin.allFinite() && lm.slides.empty();
+  const bool facing_only = cfg.refine_facing_only && as_seen;
+  const bool by_rays = cfg.refine_ray_pairs && as_seen && lm.sample_directions.size() == lm.samples.size();
   const float radius = 0.5f * lm.tube_d_mm;
   res.pose = start;
   const float inlier = float(cfg.refine_inlier_mm);
