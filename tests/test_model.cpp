@@ -290,6 +290,34 @@ TEST(PipeModel, ATwinsSpreadIsHowFarItsSurfaceLiesFromThePipes) {
   EXPECT_EQ(describe_near_symmetries(tube), "no near symmetry (no pose has a twin to tell apart)");
 }
 
+// The integrator's figure: how far from this camera a pixel's footprint stays fine enough to tell
+// a near twin from the pipe. It grows with the twin's spread and the focal length.
+TEST(PipeModel, ANearTwinIsResolvedNearerThanTwoPixelsCoverItsSpread) {
+  PipeSpec spec;
+  spec.diameter_mm = 16;
+  spec.segments = parse_centreline("S40,B90r30,S34");
+  const PipeModel m = derive_pipe_model(make_pipe(spec), "S40,B90r30,S34");
+  ASSERT_GE(m.near_symmetry_spread.size(), 1u);
+  float nearest = INFINITY;
+  for (const PipeModel::Spread& s : m.near_symmetry_spread) nearest = std::min(nearest, s.max_mm);
+  const double fx = 570.3;
+  const double within = twin_resolved_within_mm(m, fx);
+  // At that distance a pixel covers half the spread: two pixels span it.
+  EXPECT_NEAR(kTwinResolvedPixels * within / fx, nearest, 1e-3 * nearest);
+  EXPECT_NEAR(twin_resolved_within_mm(m, 2 * fx), 2 * within, 1e-6 * within);
+  const std::string line = describe_twin_resolution(m, fx);
+  char metres[16];
+  std::snprintf(metres, sizeof metres, "%.2f m", within / 1000.0);
+  EXPECT_NE(line.find(metres), std::string::npos) << line;
+  EXPECT_NE(line.find("end for end"), std::string::npos) << line;
+  PipeSpec straight;
+  straight.diameter_mm = 16;
+  straight.segments = parse_centreline("S80");
+  const PipeModel tube = derive_pipe_model(make_pipe(straight), "S80");
+  EXPECT_TRUE(std::isinf(twin_resolved_within_mm(tube, fx)));
+  EXPECT_EQ(describe_twin_resolution(tube, fx), "");
+}
+
 TEST(PipeModel, ModelFrameNeedNotBeCentred) {
   PipeSpec spec = pipe_preset("sbend");
   spec.model_frame.translation() = Eigen::Vector3d(300, -200, 50);

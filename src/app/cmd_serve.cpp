@@ -108,6 +108,8 @@ int serve(const Options& opt) {
   spdlog::info("model: {}", describe_near_symmetries(model));
   std::unique_ptr<FrameSource> source = open_frame_source(cfg, model);
   spdlog::info("source: {}", source->describe());
+  const std::string twin_resolution = describe_twin_resolution(model, source->intrinsics().fx);
+  if (!twin_resolution.empty()) spdlog::info("model: {}", twin_resolution);
   Service service(cfg, model, std::move(source));
   spdlog::info("timing log: {} (rotated at {} KiB, {} kept)", service.log().path(), cfg.log.max_file_kb,
                cfg.log.keep_files);
@@ -120,7 +122,8 @@ int serve(const Options& opt) {
     char model_text[256];
     std::snprintf(model_text, sizeof model_text, "%s: tube diameter D %.1f mm, longest extent L %.1f mm",
                   model.source.c_str(), model.tube_diameter_mm, model.extent_mm);
-    info.model = std::string(model_text) + "; " + describe_near_symmetries(model);
+    info.model = std::string(model_text) + "; " + describe_near_symmetries(model) +
+                 (twin_resolution.empty() ? "" : "; " + twin_resolution);
     info.source = service.source().describe();
     info.plc = link->describe();
     info.config_path = cfg.path;

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <limits>
 #include <numeric>
 #include <random>
 #include <unordered_map>
@@ -521,6 +522,35 @@ std::string describe_near_symmetries(const PipeModel& model) {
     out += text;
   }
   return out + ". Where a view does not resolve that, the pose is AMBIGUOUS (not handed out)";
+}
+
+namespace {
+
+// The spread everywhere of the near twin nearest the pipe (infinity without one).
+double nearest_twin_spread_mm(const PipeModel& model) {
+  double nearest_mm = std::numeric_limits<double>::infinity();
+  for (const PipeModel::Spread& s : model.near_symmetry_spread)
+    nearest_mm = std::min(nearest_mm, double(s.max_mm));
+  return nearest_mm;
+}
+
+}  // namespace
+
+double twin_resolved_within_mm(const PipeModel& model, double fx_px) {
+  return nearest_twin_spread_mm(model) * fx_px / kTwinResolvedPixels;
+}
+
+std::string describe_twin_resolution(const PipeModel& model, double fx_px) {
+  if (model.near_symmetry_spread.empty() || !(fx_px > 0)) return "";
+  char text[320];
+  std::snprintf(
+      text, sizeof text,
+      "this camera (fx %.0f px) resolves the near twin nearer than %.2f m, where %.0f pixels cover its "
+      "%.1f mm spread; farther, the image may not tell the pipe's ends apart: its poses stay AMBIGUOUS or "
+      "a pick may be the pipe turned end for end (mount the camera nearer where the ends differ)",
+      fx_px, twin_resolved_within_mm(model, fx_px) / 1000.0, kTwinResolvedPixels,
+      nearest_twin_spread_mm(model));
+  return text;
 }
 
 PipeModel load_pipe_model(const std::string& stl_path, const ModelDerivation& params) {

@@ -95,5 +95,17 @@ std::vector<Pose> find_near_symmetries(const SurfaceSamples& surface, const Eige
 PipeModel::Spread surface_spread(const SurfaceSamples& surface, const Pose& motion, float spacing_mm);
 // One line for the start-up log: the near symmetries and how far each lies from the pipe.
 std::string describe_near_symmetries(const PipeModel& model);
+// A near twin whose surface lies within about this many pixels' footprint of the pipe's
+// everywhere was mostly not told apart on the zoo: 23-planar (0.9 px) and 05-elbow (1.4 px) of
+// seed 21 stayed ambiguous or were handed out turned end for end; at 2.1-2.6 px (11-S-asym,
+// 04-elbow) the bins cleared (docs/experiments.md, "Near twins the view cannot resolve").
+constexpr double kTwinResolvedPixels = 2.0;
+// How far from the camera (mm) a pixel's footprint (distance / fx_px) stays within
+// 1 / kTwinResolvedPixels of the nearest near twin's spread everywhere: nearer, the camera resolves
+// the twin; farther, it may not. Infinity without a near symmetry.
+double twin_resolved_within_mm(const PipeModel& model, double fx_px);
+// One line for the start-up log with the camera's focal length: that distance, for the integrator
+// choosing how high to mount the camera ("" without a near symmetry).
+std::string describe_twin_resolution(const PipeModel& model, double fx_px);
 
 }  // namespace pipeloc
