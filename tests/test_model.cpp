@@ -305,17 +305,22 @@ TEST(PipeModel, ANearTwinIsResolvedNearerThanTwoPixelsCoverItsSpread) {
   // At that distance a pixel covers half the spread: two pixels span it.
   EXPECT_NEAR(kTwinResolvedPixels * within / fx, nearest, 1e-3 * nearest);
   EXPECT_NEAR(twin_resolved_within_mm(m, 2 * fx), 2 * within, 1e-6 * within);
-  const std::string line = describe_twin_resolution(m, fx);
+  EXPECT_NEAR(twin_resolved_within_mm(m, fx, kTwinUnresolvedPixels), 2 * within, 1e-6 * within);
+  const std::string line = describe_twin_resolution(m, fx, false);
   char metres[16];
   std::snprintf(metres, sizeof metres, "%.2f m", within / 1000.0);
   EXPECT_NE(line.find(metres), std::string::npos) << line;
   EXPECT_NE(line.find("end for end"), std::string::npos) << line;
+  EXPECT_EQ(line.find("no pose is handed out"), std::string::npos) << line;
+  std::snprintf(metres, sizeof metres, "%.2f m", 2 * within / 1000.0);
+  const std::string withheld = describe_twin_resolution(m, fx, true);
+  EXPECT_NE(withheld.find(std::string("farther than ") + metres), std::string::npos) << withheld;
   PipeSpec straight;
   straight.diameter_mm = 16;
   straight.segments = parse_centreline("S80");
   const PipeModel tube = derive_pipe_model(make_pipe(straight), "S80");
   EXPECT_TRUE(std::isinf(twin_resolved_within_mm(tube, fx)));
-  EXPECT_EQ(describe_twin_resolution(tube, fx), "");
+  EXPECT_EQ(describe_twin_resolution(tube, fx, true), "");
 }
 
 TEST(PipeModel, ModelFrameNeedNotBeCentred) {

@@ -108,7 +108,8 @@ int serve(const Options& opt) {
   spdlog::info("model: {}", describe_near_symmetries(model));
   std::unique_ptr<FrameSource> source = open_frame_source(cfg, model);
   spdlog::info("source: {}", source->describe());
-  const std::string twin_resolution = describe_twin_resolution(model, source->intrinsics().fx);
+  const std::string twin_resolution =
+      describe_twin_resolution(model, source->intrinsics().fx, cfg.locate.twin_beyond_resolution_ambiguous);
   if (!twin_resolution.empty()) spdlog::info("model: {}", twin_resolution);
   Service service(cfg, model, std::move(source));
   spdlog::info("timing log: {} (rotated at {} KiB, {} kept)", service.log().path(), cfg.log.max_file_kb,

@@ -258,6 +258,7 @@ void read_locate(Section& s, LocateConfig* c) {
   s.boolean("judge_rolls", &c->judge_rolls);
   s.real("roll_ambiguity_mm", &c->roll_ambiguity_mm, 0, 1000, "mm");
   s.boolean("tell_rolls_apart", &c->tell_rolls_apart);
+  s.boolean("twin_beyond_resolution_ambiguous", &c->twin_beyond_resolution_ambiguous);
   s.boolean("rivals_across_regions", &c->rivals_across_regions);
   s.boolean("judge_slides", &c->judge_slides);
   s.boolean("pin_slides_by_ends", &c->pin_slides_by_ends);

@@ -335,6 +335,9 @@ Decision decide(const Evidence& given, const LocateConfig& cfg) {
   if (e.ends_must_pin && (e.best.ends_pinned == 0 || e.best.ends_continued > 0)) out.ambiguous = true;
   // ... and one whose turn about its own length the image does not tell (judge_rolls).
   if (e.roll_unsure) out.ambiguous = true;
+  // ... and one further from the camera than where one pixel covers its near twin's spread
+  // everywhere: no pixel can tell the two apart (twin_beyond_resolution_ambiguous).
+  if (e.twin_unresolved) out.ambiguous = true;
   // An ambiguous pose further out of the view than any pose may be picked is not placed by the
   // image: neither its part out of the view nor its rival's is checked. It is no estimate (the
   // zoo's 16-arc, its arcs reaching out of the view: 10 of its 13 false estimates).
@@ -1000,6 +1003,9 @@ bool work_candidate(const CandidateContext& ctx, const CandidateInput& in, const
   evidence.best = judged.best.check, evidence.second = judged.second.check;
   evidence.told = judged.told;
   evidence.roll_unsure = judged.roll_unsure;
+  evidence.twin_unresolved = ctx.cfg.twin_beyond_resolution_ambiguous &&
+                             (judged.best.model_to_cam * ctx.lm.centroid.cast<double>()).z() >
+                                 twin_resolved_within_mm(*ctx.lm.model, ctx.camera.fx, kTwinUnresolvedPixels);
   evidence.rival_ends_apart =
       !judged.have_second || ends_tell_apart(ctx.lm.centreline_points, ctx.lm.tube_d_mm,
                                              judged.best.model_to_bin, judged.second.model_to_bin);

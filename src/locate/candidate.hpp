@@ -180,6 +180,7 @@ struct Evidence {
   Verification best, second;                      // ... more than ambiguity_pose_mm from it
   TellingPixels told;                             // ... the pixels where the image tells them apart
   bool roll_unsure = false;                       // ... the turn about its length not told (judge_rolls)
+  bool twin_unresolved = false;  // ... further from the camera than it resolves the near twin
   bool rival_ends_apart = true;  // ... their ends lie where judge_ends tells them (ends_tell_apart)
 };
 

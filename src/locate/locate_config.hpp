@@ -130,8 +130,8 @@ struct LocateConfig {
                                    // a pipe that slides along itself: surface_refine.hpp)
   bool refine_ray_pairs = false;   // a point pairs with the tube where the camera's ray through it
                                    // meets it, not with the nearest sample (whose pairs read a thin
-                                   // tube's noise as lying nearer the camera); off: on the zoo it
-                                   // hands out more near twins (docs/experiments.md)
+                                   // tube's noise as lying nearer the camera); off: it costs the
+                                   // dev set's cycle 1.3x (docs/experiments.md)
   double refine_inlier_mm = 4;     // point-to-plane pairs farther than this are not the pipe
                                    // (0: 1.7 sigma of the frame's measured noise, at least 0.2 D)
   double verify_tolerance_mm = 7;  // depth agreement, 3 sigma of a Kinect-class sensor's noise at 1.1 m
@@ -175,6 +175,9 @@ struct LocateConfig {
                                   // than this (the pick-correct tolerance): ambiguous ...
   bool tell_rolls_apart = true;   // ... unless, where the two differ, the image speaks for the found
                                   // pose and hardly for the turn (as tell_rivals_apart)
+  // A pose further from the camera than where one pixel covers its near twin's spread everywhere
+  // (twin_resolved_within_mm): ambiguous, whatever its pixels say.
+  bool twin_beyond_resolution_ambiguous = true;
   bool rivals_across_regions = true;  // two regions' estimates that read one pipe two ways, the
                                       // image confirming both about as well: both ambiguous (both
                                       // in view: the one whose ends show worse dropped)

@@ -536,11 +536,11 @@ double nearest_twin_spread_mm(const PipeModel& model) {
 
 }  // namespace
 
-double twin_resolved_within_mm(const PipeModel& model, double fx_px) {
-  return nearest_twin_spread_mm(model) * fx_px / kTwinResolvedPixels;
+double twin_resolved_within_mm(const PipeModel& model, double fx_px, double pixels) {
+  return nearest_twin_spread_mm(model) * fx_px / pixels;
 }
 
-std::string describe_twin_resolution(const PipeModel& model, double fx_px) {
+std::string describe_twin_resolution(const PipeModel& model, double fx_px, bool poses_withheld) {
   if (model.near_symmetry_spread.empty() || !(fx_px > 0)) return "";
   char text[320];
   std::snprintf(
@@ -550,7 +550,14 @@ std::string describe_twin_resolution(const PipeModel& model, double fx_px) {
       "a pick may be the pipe turned end for end (mount the camera nearer where the ends differ)",
       fx_px, twin_resolved_within_mm(model, fx_px) / 1000.0, kTwinResolvedPixels,
       nearest_twin_spread_mm(model));
-  return text;
+  std::string out = text;
+  if (poses_withheld) {
+    std::snprintf(text, sizeof text,
+                  "; farther than %.2f m, where one pixel covers it, no pose is handed out (AMBIGUOUS)",
+                  twin_resolved_within_mm(model, fx_px, kTwinUnresolvedPixels) / 1000.0);
+    out += text;
+  }
+  return out;
 }
 
 PipeModel load_pipe_model(const std::string& stl_path, const ModelDerivation& params) {

@@ -100,12 +100,16 @@ std::string describe_near_symmetries(const PipeModel& model);
 // seed 21 stayed ambiguous or were handed out turned end for end; at 2.1-2.6 px (11-S-asym,
 // 04-elbow) the bins cleared (docs/experiments.md, "Near twins the view cannot resolve").
 constexpr double kTwinResolvedPixels = 2.0;
-// How far from the camera (mm) a pixel's footprint (distance / fx_px) stays within
-// 1 / kTwinResolvedPixels of the nearest near twin's spread everywhere: nearer, the camera resolves
-// the twin; farther, it may not. Infinity without a near symmetry.
-double twin_resolved_within_mm(const PipeModel& model, double fx_px);
+// ... and where one pixel's footprint covers that spread, no pixel can show it at all: the
+// localizer's twin_beyond_resolution_ambiguous.
+constexpr double kTwinUnresolvedPixels = 1.0;
+// How far from the camera (mm) `pixels` pixels' footprint (distance / fx_px each) stays within the
+// nearest near twin's spread everywhere: nearer, the camera resolves the twin; farther, it may not.
+// Infinity without a near symmetry.
+double twin_resolved_within_mm(const PipeModel& model, double fx_px, double pixels = kTwinResolvedPixels);
 // One line for the start-up log with the camera's focal length: that distance, for the integrator
-// choosing how high to mount the camera ("" without a near symmetry).
-std::string describe_twin_resolution(const PipeModel& model, double fx_px);
+// choosing how high to mount the camera, and with poses_withheld the distance beyond which the
+// localizer hands out none ("" without a near symmetry).
+std::string describe_twin_resolution(const PipeModel& model, double fx_px, bool poses_withheld);
 
 }  // namespace pipeloc
