@@ -109,7 +109,9 @@ void add_locate(CLI::App& app) {
                     " pixels have a depth; the service answers such a frame with ERROR 2)");
     const PipeModel model = load_pipe_model(model_file);
     spdlog::info("model: {}", describe_near_symmetries(model));
-    if (const std::string twin = describe_twin_resolution(model, sized.intrinsics.fx, cfg.twin_beyond_resolution_ambiguous); !twin.empty())
+    if (const std::string twin =
+            describe_twin_resolution(model, sized.intrinsics.fx, cfg.twin_beyond_resolution_ambiguous);
+        !twin.empty())
       spdlog::info("model: {}", twin);
     Locator locator(model, cfg, sized.intrinsics);
     const LocateOutput& out = locator.locate(depth, sized);

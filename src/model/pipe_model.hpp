@@ -97,7 +97,7 @@ PipeModel::Spread surface_spread(const SurfaceSamples& surface, const Pose& moti
 std::string describe_near_symmetries(const PipeModel& model);
 // A near twin whose surface lies within about this many pixels' footprint of the pipe's
 // everywhere was mostly not told apart on the zoo: 23-planar (0.9 px) and 05-elbow (1.4 px) of
-// seed 21 stayed ambiguous or were handed out turned end for end; at 2.1-2.6 px (11-S-asym,
+// seed 21 stayed ambiguous or were handed out turned end for end; at 2.1-2.7 px (11-S-asym,
 // 04-elbow) the bins cleared (docs/experiments.md, "Near twins the view cannot resolve").
 constexpr double kTwinResolvedPixels = 2.0;
 // ... and where one pixel's footprint covers that spread, no pixel can show it at all: the
