@@ -778,7 +778,7 @@ TEST(Locator, AThinElbowTheSensorDoesNotResolveIsNotHandedOut) {
 
 // A thin bend whose near twin (the ends swapped) lies within 1.7 mm of it everywhere (the zoo's
 // 23-planar of seed 21), in pairs 1.05-1.12 m under the Kinect-class sensor: one pixel covers that
-// spread from 0.97 m on. With twin_beyond_resolution_ambiguous every pose found there is ambiguous,
+// spread from 0.98 m on. With twin_beyond_resolution_ambiguous every pose found there is ambiguous,
 // none handed out; without it some are, though no pixel can tell which end is which.
 TEST(Locator, ANearTwinTheCameraDoesNotResolveIsNotHandedOut) {
   const PipeModel model = pipe_of("S14.7,B69.1r56.1,S23.8", 9.1, "thin bend with a near twin");

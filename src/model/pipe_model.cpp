@@ -542,19 +542,19 @@ double twin_resolved_within_mm(const PipeModel& model, double fx_px, double pixe
 
 std::string describe_twin_resolution(const PipeModel& model, double fx_px, bool poses_withheld) {
   if (model.near_symmetry_spread.empty() || !(fx_px > 0)) return "";
+  const double spread_mm = nearest_twin_spread_mm(model);
   char text[320];
   std::snprintf(
       text, sizeof text,
       "this camera (fx %.0f px) resolves the near twin nearer than %.2f m, where %.0f pixels cover its "
       "%.1f mm spread; farther, the image may not tell the pipe's ends apart: its poses stay AMBIGUOUS or "
       "a pick may be the pipe turned end for end (mount the camera nearer where the ends differ)",
-      fx_px, twin_resolved_within_mm(model, fx_px) / 1000.0, kTwinResolvedPixels,
-      nearest_twin_spread_mm(model));
+      fx_px, spread_mm * fx_px / kTwinResolvedPixels / 1000.0, kTwinResolvedPixels, spread_mm);
   std::string out = text;
   if (poses_withheld) {
     std::snprintf(text, sizeof text,
                   "; farther than %.2f m, where one pixel covers it, no pose is handed out (AMBIGUOUS)",
-                  twin_resolved_within_mm(model, fx_px, kTwinUnresolvedPixels) / 1000.0);
+                  spread_mm * fx_px / kTwinUnresolvedPixels / 1000.0);
     out += text;
   }
   return out;
