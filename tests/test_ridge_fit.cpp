@@ -482,6 +482,8 @@ TEST(SurfaceRefine, AThinTubesNoiseAlongTheRaysDoesNotLiftIt) {
   const float by_rays = lift_mm(rays), by_nearest = lift_mm(nearest);
   std::printf("refined from the truth: lifted %+.2f mm paired along the rays, %+.2f mm with the nearest\n",
               by_rays, by_nearest);
+  // Measured: +0.19 mm along the rays in the refinement's last six iterations (+0.08 in all of
+  // them, +0.46 in the last three), +1.66 mm with the nearest.
   EXPECT_LT(std::abs(by_rays), 0.25f);
   EXPECT_GT(by_nearest, 0.4f) << "the nearest samples lift a thin tube's fit";
 }
@@ -491,15 +493,17 @@ TEST(SurfaceRefine, AThinTubesNoiseAlongTheRaysDoesNotLiftIt) {
 // pose metres (a torus-like ring of the dev set: 58 such steps in one frame). Paired with the
 // nearest samples the piece stays within 10 mm; paired along the rays (refine_ray_pairs), where each
 // partner lies on a straight cylinder round its sample, nothing holds the piece of the ring where
-// it lies along the ring, and it drifts along it by some 20 mm (measured 22.2): the damping keeps
-// that to tens of millimetres, and the image's judgement of the pose does the rest
-// (docs/experiments.md, "Points paired along the camera's rays").
+// it lies along the ring, and it drifts along it by up to some 20 mm (measured 9.4 paired so in
+// the refinement's last six iterations, 22.2 in all of them): the damping keeps that to tens of
+// millimetres, and the image's judgement of the pose does the rest (docs/experiments.md, "Points
+// paired along the camera's rays").
 TEST(SurfaceRefine, APieceOfABendRefinedFromNearItsPoseStaysNear) {
   std::mt19937 rng(7);
   std::normal_distribution<float> noise(0.0f, 1.0f);
   for (const char* path : {"S20,B200r45,S20", "S30,B120r45t90,B90r45t90,S30"}) {
     const PipeModel model = pipe_of(path, 16);
-    const LocateConfig nearest;
+    LocateConfig nearest;
+    nearest.refine_ray_pairs = false;
     LocateConfig rays = nearest;
     rays.refine_ray_pairs = true;
     const LocatorModel lm = prepare_locator_model(model, 8.0f, rays);
