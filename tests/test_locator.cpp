@@ -709,20 +709,16 @@ TEST(Locator, ARegionTheRidgeFitsMissIsSearchedAgainOnItsSurface) {
 // the bin floor, the last pipe of a bin, whose ridge of a few points the fits miss.
 TEST(Locator, ALoneThinElbowTheRidgeFitsMissIsPickedFromItsSecondSearch) {
   const PipeModel model = thin_elbow();
-  // Paired along the camera's rays (the default) the first searches pick 27 of these 30 elbows and
-  // leave the second search none the first missed: this test is of the second search, so the
-  // refinement pairs with the nearest samples, where the first searches miss more.
-  LocateConfig may_pick;
-  may_pick.refine_ray_pairs = false;
-  LocateConfig reported = may_pick;
+  LocateConfig reported;
   reported.second_search_may_pick = false;
+  const LocateConfig by_default;
   int picks_reported = 0, picks = 0, from_second = 0, wrong = 0;
   std::mt19937 rng(11);
   constexpr int kImages = 30;
   for (int image = 0; image < kImages; ++image) {
     // One elbow on the floor, the sensor 0.65-0.72 m up (as 04-elbow of the zoo).
     const SimulatedScene s = pipes_below_stereo(model, 1, 650, 720, rng);
-    Locator a(model, reported, s.camera.intrinsics), b(model, may_pick, s.camera.intrinsics);
+    Locator a(model, reported, s.camera.intrinsics), b(model, by_default, s.camera.intrinsics);
     const LocateOutput& first = a.locate_to_pick(s.depth_mm, s.camera);
     const int pa = first.pick();
     const Pose pose_a = pa >= 0 ? first.estimates[std::size_t(pa)].model_to_cam : Pose::Identity();

@@ -128,10 +128,11 @@ struct LocateConfig {
   bool refine_facing_only = true;  // a point pairs only with model surface facing the camera (a
                                    // reading beside a thin tube is not its hidden underside; not for
                                    // a pipe that slides along itself: surface_refine.hpp)
-  bool refine_ray_pairs = true;    // a point pairs with the tube where the camera's ray through it
+  bool refine_ray_pairs = false;   // a point pairs with the tube where the camera's ray through it
                                    // meets it, not with the nearest sample (whose pairs read a thin
-                                   // tube's noise as lying nearer the camera); in the refinement's
-                                   // last iterations, not for a pipe that slides along itself
+                                   // tube's noise as lying nearer the camera), in the refinement's
+                                   // last iterations; off: six bins of every shape of the zoo take
+                                   // fewer pipes with it, at 1.15x the cycle (docs/experiments.md)
   double refine_inlier_mm = 4;     // point-to-plane pairs farther than this are not the pipe
                                    // (0: 1.7 sigma of the frame's measured noise, at least 0.2 D)
   double verify_tolerance_mm = 7;  // depth agreement, 3 sigma of a Kinect-class sensor's noise at 1.1 m

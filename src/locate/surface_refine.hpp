@@ -21,7 +21,7 @@ constexpr float kFacingSlack = 0.3f;
 
 // Point-to-plane ICP of observed points (bin frame) onto the model surface. With the camera's
 // centre (bin frame), for a pipe that does not slide along itself:
-// - with refine_ray_pairs (on by default), in the last iterations a point pairs with the tube
+// - with refine_ray_pairs (off by default), in the last iterations a point pairs with the tube
 //   where the camera's ray through it meets it, near its nearest sample: its depth noise lies
 //   along that ray (docs/experiments.md, "Points paired along the camera's rays");
 // - else, or where that ray misses the tube, with its nearest sample, and with refine_facing_only
