@@ -534,10 +534,13 @@ double nearest_twin_spread_mm(const PipeModel& model) {
   return nearest_mm;
 }
 
+// The distance (mm) from the camera where `pixels` pixels' footprint spans `spread_mm`.
+double spanned_within_mm(double spread_mm, double fx_px, double pixels) { return spread_mm * fx_px / pixels; }
+
 }  // namespace
 
 double twin_resolved_within_mm(const PipeModel& model, double fx_px, double pixels) {
-  return nearest_twin_spread_mm(model) * fx_px / pixels;
+  return spanned_within_mm(nearest_twin_spread_mm(model), fx_px, pixels);
 }
 
 std::string describe_twin_resolution(const PipeModel& model, double fx_px, bool poses_withheld) {
@@ -549,12 +552,13 @@ std::string describe_twin_resolution(const PipeModel& model, double fx_px, bool 
       "this camera (fx %.0f px) resolves the near twin nearer than %.2f m, where %.0f pixels cover its "
       "%.1f mm spread; farther, the image may not tell the pipe's ends apart: its poses stay AMBIGUOUS or "
       "a pick may be the pipe turned end for end (mount the camera nearer where the ends differ)",
-      fx_px, spread_mm * fx_px / kTwinResolvedPixels / 1000.0, kTwinResolvedPixels, spread_mm);
+      fx_px, spanned_within_mm(spread_mm, fx_px, kTwinResolvedPixels) / 1000.0, kTwinResolvedPixels,
+      spread_mm);
   std::string out = text;
   if (poses_withheld) {
     std::snprintf(text, sizeof text,
                   "; farther than %.2f m, where one pixel covers it, no pose is handed out (AMBIGUOUS)",
-                  spread_mm * fx_px / kTwinUnresolvedPixels / 1000.0);
+                  spanned_within_mm(spread_mm, fx_px, kTwinUnresolvedPixels) / 1000.0);
     out += text;
   }
   return out;
