@@ -326,7 +326,8 @@ TEST(BinAwareVerification, EndsTellPosesApartOnlyWhereTheyLieBeyondTheFirstProbe
 
 // An end whose tip lies outside the sensor's view (beyond the image, or in the band an active
 // sensor does not read) is counted as such: no image can show it ending (decide() does not ask
-// for it where both ends lie there).
+// for it where both ends lie there), and what lies beyond it neither pins it nor shows it going on
+// (a coil's loop at the image's edge was pinned so, 82 mm from its pipe: 18-coil of seed 21).
 TEST(BinAwareVerification, AnEndWhoseTipLiesOutOfTheViewIsCountedSo) {
   TubeOnFloor tube;
   const Intrinsics& k = tube.s.camera.intrinsics;
@@ -346,8 +347,36 @@ TEST(BinAwareVerification, AnEndWhoseTipLiesOutOfTheViewIsCountedSo) {
   EXPECT_EQ(ends(nullptr).ends_pinned, 2);
   const PixelBox past_one{left + 2, 0, k.width - 1, k.height - 1};
   EXPECT_EQ(ends(&past_one).ends_out_of_view, 1);
+  EXPECT_EQ(ends(&past_one).ends_pinned, 1);
   const PixelBox between{left + 2, 0, right - 2, k.height - 1};
   EXPECT_EQ(ends(&between).ends_out_of_view, 2);
+  EXPECT_EQ(ends(&between).ends_pinned, 0);
+  EXPECT_EQ(ends(&between).ends_continued, 0);
+}
+
+// A pose reaching out of the view is placed along its pipe by its part in view. An arc's loop
+// running out of the view looks the same slid along the arc (judge_part_in_view): only an end the
+// image shows places it. The bend of an L in view places it; so does the view holding all of it
+// (the model's own slides judge that).
+TEST(BinAwareVerification, APartInViewThatSlidesAlongThePipeIsToldFromABendInView) {
+  const LocateConfig cfg;
+  const double d = 20;
+  Intrinsics k;
+  k.width = 640, k.height = 480, k.fx = k.fy = 570, k.cx = 320, k.cy = 240;
+  const PixelBox left_half{0, 0, k.width / 2 - 1, k.height - 1};
+  const auto slides_in = [&](const std::string& path, const PixelBox* view) {
+    const LocatorModel lm = prepare_locator_model(pipe_of(path, d, path), 8, cfg);
+    const std::vector<Eigen::Vector3f>& line = lm.centreline_points;
+    // Its centreline's middle point on the optical axis, 950 mm away.
+    Pose pose = Pose::Identity();
+    pose.translation() = Eigen::Vector3d(0, 0, 950) - line[line.size() / 2].cast<double>();
+    Verification v;
+    judge_part_in_view(line, lm.centreline_step_mm, float(d), float(d), pose, k, &v, view);
+    return v.part_in_view_slides;
+  };
+  EXPECT_TRUE(slides_in("B200r80", &left_half));
+  EXPECT_FALSE(slides_in("B200r80", nullptr));
+  EXPECT_FALSE(slides_in("S80,B90r30,S80", &left_half));
 }
 
 // On a simulated bin (floor at z = 0) the floor is found, a pipe's pose lies on it, and the same

@@ -333,6 +333,13 @@ Decision decide(const Evidence& given, const LocateConfig& cfg) {
   // Beyond the paper: a pipe that slides along itself is placed along its length only by an end
   // the image shows; where none is seen, or the tube goes on beyond one, the pose may be slid.
   if (e.ends_must_pin && (e.best.ends_pinned == 0 || e.best.ends_continued > 0)) out.ambiguous = true;
+  // ... and so a pose whose part in the view slides along the pipe, reaching out of the view
+  // (pin_part_in_view_by_ends): six bins of every shape handed out an arc's loop laid along
+  // another part of its arc, pinned where its pipe ran under another, 237 mm off (15-arc of seed
+  // 21); a long arc pinned past a pipe across its end, 40 mm round it (14-arc of seed 20); a coil's
+  // loop at the image's edge, both ends out of the view, 82 mm off (18-coil of seed 21).
+  if (e.best.part_in_view_slides && (e.best.ends_seen_ending == 0 || e.best.ends_continued > 0))
+    out.ambiguous = true;
   // ... and one whose turn about its own length the image does not tell (judge_rolls).
   if (e.roll_unsure) out.ambiguous = true;
   // ... and one further from the camera than where one pixel covers its near twin's spread
@@ -656,6 +663,11 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
     if (cfg.pin_slides_by_ends)
       judge_ends(lm.centreline_points, lm.tube_d_mm, e->model_to_cam, ctx.depth, ctx.camera,
                  float(cfg.verify_tolerance_mm), &e->check, end_reading, &ctx.view);
+    // Slid D along itself, or the ambiguity distance where D is less (nearer, the same pick).
+    if (cfg.pin_part_in_view_by_ends && e->check.outside_view > 0)
+      judge_part_in_view(lm.centreline_points, lm.centreline_step_mm, lm.tube_d_mm,
+                         std::max(lm.tube_d_mm, float(cfg.ambiguity_pose_mm)), e->model_to_cam, ctx.camera,
+                         &e->check, &ctx.view);
     if (!std::isnan(ctx.lowest_surface_z_mm))
       e->check.below_floor = share_below(lm.verify_mesh, e->model_to_bin,
                                          ctx.lowest_surface_z_mm - kBelowFloorOfD * lm.tube_d_mm);

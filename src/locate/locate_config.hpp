@@ -200,6 +200,10 @@ struct LocateConfig {
   bool follow_slides_to_ends = true;  // ... and a pose of it the tube goes on beyond, no end pinned,
                                       // is moved along itself by D, 2 D, ... to where the image
                                       // shows one of its ends ending outright
+  bool pin_part_in_view_by_ends = true;  // a pose reaching out of the view whose part in view
+                                         // slides along the pipe (an arc's or a coil's loop) is
+                                         // pickable only where an end in view is seen ending
+                                         // outright and no end goes on (judge_part_in_view)
 
   // The paper's comparison: ICP on points sampled from the whole visible surface instead of the
   // Z-ridge (eval-bop --match surface).
@@ -229,6 +233,7 @@ inline void use_paper_search(LocateConfig* c) {
   c->slides_placed_first = false;
   c->place_slides_finely = false;
   c->follow_slides_to_ends = false;
+  c->pin_part_in_view_by_ends = false;
   c->ends_read_further = false;
   c->ends_read_slanted = false;
   c->judge_rolls = false;

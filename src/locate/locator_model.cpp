@@ -130,6 +130,7 @@ LocatorModel prepare_locator_model(const PipeModel& model, float margin_mm, cons
   for (std::size_t i = 0; i < centreline.points.size(); i += cstride)
     lm.centreline_points.push_back(centreline.points[i]);
   if (!centreline.points.empty()) lm.centreline_points.push_back(centreline.points.back());
+  lm.centreline_step_mm = float(cstride) * centreline.step_mm;
   if (lm.centreline_points.size() >= 2) {
     const Eigen::Vector3f a = lm.centreline_points.front(), b = lm.centreline_points.back();
     const Eigen::Vector3f u = (b - a).normalized();

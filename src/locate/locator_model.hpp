@@ -30,6 +30,7 @@ struct LocatorModel {
   // Points along the tube's centreline (model/slides.hpp), for pick distances: a pipe turned
   // about its own straight axis is the same pick. Empty when no centreline was found.
   std::vector<Eigen::Vector3f> centreline_points;
+  float centreline_step_mm = 0;  // ... their spacing along it (the last may be nearer)
   // A straight tube (its centreline within D/10 of a line): turned about its own axis it is the
   // same, and the ridge ICP leaves that turn out (locate/rigid_fit.hpp).
   bool straight = false;

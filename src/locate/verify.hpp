@@ -62,6 +62,9 @@ struct Verification {
   int ends_pinned_further = 0;
   // ... and the ends whose tip lies outside the sensor's view: the image cannot show them.
   int ends_out_of_view = 0;
+  // The part of the tube in the sensor's view slides along the pipe (judge_part_in_view): only an
+  // end the image shows places the pose along it.
+  bool part_in_view_slides = false;
 };
 
 // A pose is under the floor when more than this share of its model lies more than this * D below
@@ -115,6 +118,17 @@ struct EndReading {
 void judge_ends(const std::vector<Eigen::Vector3f>& centreline, float d_mm, const Pose& model_to_cam,
                 const Image<float>& depth_mm, const Intrinsics& k, float tolerance_mm, Verification* v,
                 const EndReading& how = {}, const PixelBox* view = nullptr);
+// Beyond the paper: does the part of a pipe the sensor sees slide along the pipe? A pose reaching
+// out of the view is placed by what is in view: its bends where they are, or its ends. Where the
+// centreline's part in view (`view`: read_view(); the whole image where null) moves onto the
+// centreline slide_mm further along it, either way, as a rigid motion that leaves it within one
+// pixel's footprint there (RMS; at least the share of D a model's own slides land within,
+// model/slides.hpp), a pose slid so looks the same in the view: an arc's or a coil's loop running
+// out of the image, whatever the pipe does beyond. Sets part_in_view_slides of *v; false for a
+// pose wholly in the view (the model's own slides judge it). step_mm: the centreline's spacing.
+void judge_part_in_view(const std::vector<Eigen::Vector3f>& centreline, float step_mm, float d_mm,
+                        float slide_mm, const Pose& model_to_cam, const Intrinsics& k, Verification* v,
+                        const PixelBox* view);
 // Whether judge_ends can tell two poses of one centreline (model frame, tube diameter d_mm) apart:
 // with their ends paired so that they lie closest, an end of one lies farther from the other's
 // than the first probe beyond an end reaches. Nearer, both poses' probes read beyond the same end

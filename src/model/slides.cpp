@@ -17,11 +17,6 @@ constexpr float kLinkOfD = 0.5f;   // centre points this close are neighbours al
 constexpr float kStepOfD = 0.25f;  // the polyline's step
 constexpr float kMinReached = 0.9f;  // of the centre points: fewer and the cloud is not one tube
 constexpr std::size_t kLandingSamples = 1500;
-// A slide moves the centreline onto itself within this share of D: the slid surface then lies
-// within a fraction of a pixel's footprint of the original for any pipe a sensor sees several
-// pixels wide, and only the ends tell the two apart. (Arcs and straight runs: under 0.02 D; the
-// zoo's coils 0.02-0.04 D; a fat elbow, an S or a long planar bend 0.04-0.08 D; a U or Z over 0.2 D.)
-constexpr float kCentrelineRmsOfD = 0.03f;
 
 // Distances through the cloud from `from` along links shorter than link_mm (Dijkstra).
 std::vector<float> distances_through(const std::vector<Eigen::Vector3f>& pts, const KdTree3& tree, int from,
@@ -160,7 +155,8 @@ std::vector<Slide> find_slides(const SurfaceIndex& surface, const Centreline& li
       double sq = 0;
       for (int i = 0; i < n - k; ++i) sq += (m * from.col(i) - to.col(i)).squaredNorm();
       const float rms = float(std::sqrt(sq / double(n - k)));
-      if (share >= min_share && rms <= kCentrelineRmsOfD * d) found.push_back({m, float(sign) * float(k) * line.step_mm, share, rms});
+      if (share >= min_share && rms <= kSlideCentrelineRmsOfD * d)
+        found.push_back({m, float(sign) * float(k) * line.step_mm, share, rms});
     }
   }
   return found;

@@ -29,6 +29,12 @@ Centreline centreline_of(const SurfaceSamples& surface, float tube_d_mm);
 // when the line is too short.
 Pose best_reversal(const Centreline& centreline);
 
+// A slide moves the centreline onto itself within this share of D: the slid surface then lies
+// within a fraction of a pixel's footprint of the original for any pipe a sensor sees several
+// pixels wide, and only the ends tell the two apart. (Arcs and straight runs: under 0.02 D; the
+// zoo's coils 0.02-0.04 D; a fat elbow, an S or a long planar bend 0.04-0.08 D; a U or Z over 0.2 D.)
+constexpr float kSlideCentrelineRmsOfD = 0.03f;
+
 struct Slide {
   Pose motion;            // model frame to model frame
   float arc_mm = 0;       // how far along the centreline it moves (signed)
