@@ -304,13 +304,17 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
       // ... but where its part in view slides along the pipe (an arc's or a coil's loop), only an
       // end in view seen ending outright, none going on, places it (pin_part_in_view_by_ends).
       {"a third out of the view, well seen, both ends out of it, its part in view sliding",
-       slides_in_view(ends_out_of_view(ends_read(judged(outside_view(seen(950, 0, 0), 0.35f)), 0, 0, 0, 0), 2)),
+       slides_in_view(
+           ends_out_of_view(ends_read(judged(outside_view(seen(950, 0, 0), 0.35f)), 0, 0, 0, 0), 2)),
        true, CandidateOutcome::accepted, true, false, 0.6175f * kAmbiguousScoreFactor},
       {"the same, one end in view pinned, not seen ending outright",
-       slides_in_view(ends_out_of_view(ends_read(judged(outside_view(seen(950, 0, 0), 0.35f)), 1, 0, 0, 0), 1)),
+       slides_in_view(
+           ends_out_of_view(ends_read(judged(outside_view(seen(950, 0, 0), 0.35f)), 1, 0, 0, 0), 1)),
        true, CandidateOutcome::accepted, true, false, 0.6175f * kAmbiguousScoreFactor},
       {"the same, that end seen ending outright",
-       seen_ending(slides_in_view(ends_out_of_view(ends_read(judged(outside_view(seen(950, 0, 0), 0.35f)), 1, 0, 0, 0), 1)), 1),
+       seen_ending(slides_in_view(ends_out_of_view(
+                       ends_read(judged(outside_view(seen(950, 0, 0), 0.35f)), 1, 0, 0, 0), 1)),
+                   1),
        true, CandidateOutcome::accepted, false, true, 0.6175f},
       // From a region shorter than a * L only for a pipe that does not slide along itself, its
       // ends read and one pinned: where a sliding pipe lies along what is out of the view, a short
