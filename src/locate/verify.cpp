@@ -1,9 +1,11 @@
 #include "locate/verify.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <iterator>
 
+#include "locate/rigid_fit.hpp"
 #include "model/slides.hpp"
 
 namespace pipeloc {
@@ -21,6 +23,8 @@ constexpr float kTipProbesOfD[] = {0.0f, 0.5f};
 constexpr float kFurtherProbeOfD = 2.0f;
 // ... taken as straight where it bends on a circle wider than this many D.
 constexpr float kStraightBendOfD = 20.0f;
+// judge_part_in_view fits at most this many centreline points in view (fixed buffers).
+constexpr int kMaxPartPoints = 256;
 // With slanted, a tube's surface along the camera's ray is read at most 1 / this root farther from
 // its centreline than D / 2 (as a tube slanted 60 degrees to the image).
 constexpr float kLeastCosineSquared = 0.25f;
@@ -265,37 +269,39 @@ void judge_part_in_view(const std::vector<Eigen::Vector3f>& centreline, float st
   v->part_in_view_slides = false;
   const int n = int(centreline.size());
   if (n < 4 || !(step_mm > 0)) return;
+  // The centreline points in view (every stride-th of them where there are more than the buffers
+  // hold: a model's centreline has about 64).
   const PixelBox seen = view_or_image(view, k.width, k.height);
-  const auto at = [&](int i) { return Eigen::Vector3d(centreline[std::size_t(i)].cast<double>()); };
-  const auto in_sight = [&](int i) {
-    const Eigen::Vector3d p = model_to_cam * at(i);
-    const Eigen::Vector2d px = k.project(p);
-    return p.z() > 0 && in_view(seen, px.x(), px.y());
-  };
-  int in = 0;
+  const int stride = (n + kMaxPartPoints - 1) / kMaxPartPoints;
+  std::array<int, kMaxPartPoints> in;
+  int in_count = 0, in_view_count = 0;
   double z_sum = 0;
-  for (int i = 0; i < n; ++i)
-    if (in_sight(i)) ++in, z_sum += (model_to_cam * at(i)).z();
-  if (in == n || in < 3) return;
-  const double within_mm = std::max(double(kSlideCentrelineRmsOfD * d), z_sum / in / k.fx);
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Vector3d p = model_to_cam * centreline[std::size_t(i)].cast<double>();
+    const Eigen::Vector2d px = k.project(p);
+    if (!(p.z() > 0 && in_view(seen, px.x(), px.y()))) continue;
+    ++in_view_count, z_sum += p.z();
+    if (i % stride == 0) in[std::size_t(in_count++)] = i;
+  }
+  if (in_view_count == n || in_view_count < 3) return;
+  const double within_mm = std::max(double(kSlideCentrelineRmsOfD * d), z_sum / in_view_count / k.fx);
   const int shift = std::max(1, int(std::lround(slide_mm / step_mm)));
+  std::array<Eigen::Vector3f, kMaxPartPoints> from, to;
   for (const int sign : {1, -1}) {
-    // The rigid motion taking each point in view onto the point `shift` along (least squares:
-    // centroids, then the rotation nearest the cross-covariance), and how far it leaves them.
-    const auto paired = [&](int i) { return i + sign * shift >= 0 && i + sign * shift < n && in_sight(i); };
-    Eigen::Vector3d from_mean = Eigen::Vector3d::Zero(), to_mean = Eigen::Vector3d::Zero();
+    // The rigid motion taking each point in view onto the point `shift` along, and how far it
+    // leaves them.
     int pairs = 0;
-    for (int i = 0; i < n; ++i)
-      if (paired(i)) from_mean += at(i), to_mean += at(i + sign * shift), ++pairs;
+    for (int c = 0; c < in_count; ++c) {
+      const int j = in[std::size_t(c)] + sign * shift;
+      if (j < 0 || j >= n) continue;
+      from[std::size_t(pairs)] = centreline[std::size_t(in[std::size_t(c)])];
+      to[std::size_t(pairs++)] = centreline[std::size_t(j)];
+    }
     if (pairs < 3) continue;
-    from_mean /= pairs, to_mean /= pairs;
-    Eigen::Matrix3d cross = Eigen::Matrix3d::Zero();
-    for (int i = 0; i < n; ++i)
-      if (paired(i)) cross += (at(i + sign * shift) - to_mean) * (at(i) - from_mean).transpose();
-    const Eigen::Matrix3d r = nearest_rotation(cross);
+    const Pose m = fit_rigid(from.data(), to.data(), pairs);
     double sq = 0;
-    for (int i = 0; i < n; ++i)
-      if (paired(i)) sq += (r * (at(i) - from_mean) + to_mean - at(i + sign * shift)).squaredNorm();
+    for (int c = 0; c < pairs; ++c)
+      sq += (m * from[std::size_t(c)].cast<double>() - to[std::size_t(c)].cast<double>()).squaredNorm();
     if (std::sqrt(sq / pairs) <= within_mm) {
       v->part_in_view_slides = true;
       return;
