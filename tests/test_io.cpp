@@ -5,6 +5,7 @@
 #include "io/bop.hpp"
 #include "io/png.hpp"
 #include "io/results_csv.hpp"
+#include "render/text.hpp"
 #include "test_util.hpp"
 
 namespace pipeloc {
@@ -118,6 +119,41 @@ TEST(ResultsCsv, WritesAndReadsAndCountsMalformedRows) {
   EXPECT_NEAR(file.rows[0].model_to_cam.translation().z(), 1000, 1e-6);
   EXPECT_NEAR(file.rows[0].time_s, 0.031, 1e-9);
   EXPECT_NE(file.first_errors[0].find("line 3"), std::string::npos) << file.first_errors[0];
+}
+
+// A pose's label on the overlay is read whole: a pose at the image's edge (its centre near or
+// beyond it) has its label moved into the image, and one under the legend moved off it.
+TEST(OverlayLabel, LiesWhollyInTheImageAndOffTheLegend) {
+  const int width = 640, height = 480, scale = 2;
+  const std::string text = "R4 0.42 AMBIGUOUS";
+  const int w = int(text.size()) * 4 * scale + scale, h = 7 * scale;
+  const PixelBox legend{4, 4, 221, 151}, none;
+  auto inside = [&](const Eigen::Vector2i& at) {
+    return at.x() - scale >= 0 && at.x() - scale + w <= width && at.y() - scale >= 0 &&
+           at.y() - scale + h <= height;
+  };
+  auto clear_of = [&](const Eigen::Vector2i& at, const PixelBox& b) {
+    return at.x() - scale > b.x1 || at.x() - scale + w - 1 < b.x0 || at.y() - scale > b.y1 ||
+           at.y() - scale + h - 1 < b.y0;
+  };
+  // In the open: where it was asked.
+  EXPECT_EQ(place_label(300, 300, text, width, height, legend), Eigen::Vector2i(300, 300));
+  // Past the right edge, the bottom, the top-left corner; a centre far out of the view.
+  for (const Eigen::Vector2i& asked : {Eigen::Vector2i(600, 300), Eigen::Vector2i(300, 475),
+                                       Eigen::Vector2i(-50, -40), Eigen::Vector2i(5000, -9000)}) {
+    const Eigen::Vector2i at = place_label(asked.x(), asked.y(), text, width, height, none);
+    EXPECT_TRUE(inside(at)) << asked.transpose() << " -> " << at.transpose();
+  }
+  EXPECT_EQ(place_label(600, 300, text, width, height, none).y(), 300);  // moved along the edge only
+  // Under the legend: moved the shorter way off it, still whole.
+  for (const Eigen::Vector2i& asked : {Eigen::Vector2i(100, 140), Eigen::Vector2i(200, 40),
+                                       Eigen::Vector2i(-30, 60), Eigen::Vector2i(10, 10)}) {
+    const Eigen::Vector2i at = place_label(asked.x(), asked.y(), text, width, height, legend);
+    EXPECT_TRUE(inside(at)) << asked.transpose() << " -> " << at.transpose();
+    EXPECT_TRUE(clear_of(at, legend)) << asked.transpose() << " -> " << at.transpose();
+  }
+  EXPECT_EQ(place_label(100, 140, text, width, height, legend), Eigen::Vector2i(100, 152 + scale));
+  EXPECT_EQ(place_label(215, 40, text, width, height, legend), Eigen::Vector2i(222 + scale, 40));
 }
 
 }  // namespace

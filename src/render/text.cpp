@@ -1,5 +1,7 @@
 #include "render/text.hpp"
 
+#include <algorithm>
+
 namespace pipeloc {
 namespace {
 
@@ -55,6 +57,23 @@ void draw_label(Image<Rgb>* img, int x, int y, const std::string& text, Rgb colo
     for (int px = x - scale; px < x - scale + w; ++px)
       if (img->inside(px, py)) img->at(px, py) = {20, 20, 20};
   draw_text(img, x, y, text, color, scale);
+}
+
+Eigen::Vector2i place_label(int x, int y, const std::string& text, int width, int height,
+                            const PixelBox& keep_clear, int scale) {
+  // The dark box spans [x - scale, x - scale + w) x [y - scale, y - scale + h), as draw_label draws it.
+  const int w = int(text.size()) * 4 * scale + scale, h = 7 * scale;
+  const int x_max = std::max(scale, width - w + scale), y_max = std::max(scale, height - h + scale);
+  x = std::clamp(x, scale, x_max), y = std::clamp(y, scale, y_max);
+  const bool under = !keep_clear.empty() && x - scale <= keep_clear.x1 &&
+                     x - scale + w - 1 >= keep_clear.x0 && y - scale <= keep_clear.y1 &&
+                     y - scale + h - 1 >= keep_clear.y0;
+  if (!under) return {x, y};
+  const int below = keep_clear.y1 + 1 + scale, right = keep_clear.x1 + 1 + scale;
+  const bool below_fits = below <= y_max, right_fits = right <= x_max;
+  if (below_fits && (!right_fits || below - y <= right - x)) return {x, below};
+  if (right_fits) return {right, y};
+  return {x, y};
 }
 
 }  // namespace pipeloc

@@ -1,6 +1,7 @@
 #include "report/locate_overlay.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <iterator>
@@ -43,42 +44,49 @@ void draw_outline(Image<Rgb>* img, const Mesh& mesh, const Pose& model_to_cam, c
       if (on_outline(*scratch, box, x, y)) draw_dot(img, x, y, thickness / 2, color);
 }
 
-void draw_legend(Image<Rgb>* img) {
-  struct Entry {
-    Rgb color;
-    const char* text;
-    bool swatch = true;  // false: the line goes on explaining the entry above
-  };
-  const Entry entries[] = {{kPick, "PICK: POSE HANDED TO THE PLC"},
-                           {kOutline, "POSE, PICKABLE (R<RANK> <SCORE> OK)"},
-                           {kOther, "POSE, NOT PICKABLE (R<RANK> <SCORE> WHY):"},
-                           {kOther, " AMBIGUOUS: A TWIN OR SLID POSE FITS AS WELL", false},
-                           {kOther, " COVERED: UNDER OTHERS  PART SEEN: TOO LITTLE SEEN", false},
-                           {kOther, " GOES ON: THE TUBE GOES ON PAST BOTH ENDS", false},
-                           {kOther, " NO END: NO END SEEN ENDING", false},
-                           {kOther, " UNSURE: SECOND SEARCH, TOO LITTLE CONFIRMED", false},
-                           {kOther, " NOISY: THE SENSOR DOES NOT RESOLVE THE TUBE", false},
-                           {kOther, " TOOK NOTHING: HANDED OUT, THE BIN STAYED AS IT WAS", false},
-                           {kCore, "CORE REGION (UPWARD NORMALS)"},
-                           {kRegion, "CANDIDATE REGION (GROWN)"},
-                           {kAxis, "PRINCIPAL DIRECTION"},
-                           {kRidge, "Z-RIDGE POINTS"},
-                           {kFloor, "FLOOR SEEN BETWEEN PIPES (NO CANDIDATE)"},
-                           {kViewEdge, "EDGE OF THE VIEW (NO DEPTH READ BEYOND)"}};
-  const int scale = 1, line = 9, x0 = 4, y0 = 4;
+struct LegendEntry {
+  Rgb color;
+  const char* text;
+  bool swatch = true;  // false: the line goes on explaining the entry above
+};
+const LegendEntry kLegend[] = {{kPick, "PICK: POSE HANDED TO THE PLC"},
+                               {kOutline, "POSE, PICKABLE (R<RANK> <SCORE> OK)"},
+                               {kOther, "POSE, NOT PICKABLE (R<RANK> <SCORE> WHY):"},
+                               {kOther, " AMBIGUOUS: A TWIN OR SLID POSE FITS AS WELL", false},
+                               {kOther, " COVERED: UNDER OTHERS  PART SEEN: TOO LITTLE SEEN", false},
+                               {kOther, " GOES ON: THE TUBE GOES ON PAST BOTH ENDS", false},
+                               {kOther, " NO END: NO END SEEN ENDING", false},
+                               {kOther, " UNSURE: SECOND SEARCH, TOO LITTLE CONFIRMED", false},
+                               {kOther, " NOISY: THE SENSOR DOES NOT RESOLVE THE TUBE", false},
+                               {kOther, " TOOK NOTHING: HANDED OUT, THE BIN STAYED AS IT WAS", false},
+                               {kCore, "CORE REGION (UPWARD NORMALS)"},
+                               {kRegion, "CANDIDATE REGION (GROWN)"},
+                               {kAxis, "PRINCIPAL DIRECTION"},
+                               {kRidge, "Z-RIDGE POINTS"},
+                               {kFloor, "FLOOR SEEN BETWEEN PIPES (NO CANDIDATE)"},
+                               {kViewEdge, "EDGE OF THE VIEW (NO DEPTH READ BEYOND)"}};
+constexpr int kLegendScale = 1, kLegendLine = 9, kLegendX0 = 4, kLegendY0 = 4;
+
+// The pixels the legend covers, at the top left.
+PixelBox legend_box() {
   std::size_t longest = 0;
-  for (const Entry& e : entries) longest = std::max(longest, std::strlen(e.text));
-  const int w = 15 + 4 * scale * int(longest) + 3, h = line * int(std::size(entries)) + 4;
-  for (int y = y0; y < y0 + h; ++y)
-    for (int x = x0; x < x0 + w; ++x)
+  for (const LegendEntry& e : kLegend) longest = std::max(longest, std::strlen(e.text));
+  const int w = 15 + 4 * kLegendScale * int(longest) + 3, h = kLegendLine * int(std::size(kLegend)) + 4;
+  return {kLegendX0, kLegendY0, kLegendX0 + w - 1, kLegendY0 + h - 1};
+}
+
+void draw_legend(Image<Rgb>* img) {
+  const PixelBox box = legend_box();
+  for (int y = box.y0; y <= box.y1; ++y)
+    for (int x = box.x0; x <= box.x1; ++x)
       if (img->inside(x, y)) img->at(x, y) = {20, 20, 20};
-  int y = y0 + 3;
-  for (const Entry& e : entries) {
+  int y = box.y0 + 3;
+  for (const LegendEntry& e : kLegend) {
     for (int dy = 0; dy < 5 && e.swatch; ++dy)
       for (int dx = 0; dx < 8; ++dx)
-        if (img->inside(x0 + 3 + dx, y + dy)) img->at(x0 + 3 + dx, y + dy) = e.color;
-    draw_text(img, x0 + 15, y, e.text, {235, 235, 235}, scale);
-    y += line;
+        if (img->inside(box.x0 + 3 + dx, y + dy)) img->at(box.x0 + 3 + dx, y + dy) = e.color;
+    draw_text(img, box.x0 + 15, y, e.text, {235, 235, 235}, kLegendScale);
+    y += kLegendLine;
   }
 }
 
@@ -193,16 +201,18 @@ Image<Rgb> draw_locate_overlay(const Locator& loc, const Image<float>& depth, co
     const PipeEstimate& e = out.estimates[std::size_t(i)];
     const Eigen::Vector2d c =
         cam.intrinsics.project(e.model_to_cam * loc.locator_model().centroid.cast<double>());
+    if (!c.allFinite()) continue;
     // Not pickable: the first check it fails (Withheld's order), NO where none is named.
     const int first = withheld_index(e.withheld);
     const char* why = first < kWithheldKinds ? withheld_label(first) : "NO";
     char tail[16] = "", text[48];
     if (i != pick) std::snprintf(tail, sizeof tail, " %s", e.pickable ? "OK" : why);
     std::snprintf(text, sizeof text, "%sR%d %.2f%s", i == pick ? "PICK " : "", i, e.score, tail);
-    draw_label(&img, int(c.x()) + 12, int(c.y()) - 16, text,
-               i == pick    ? kPick
-               : e.pickable ? kOutline
-                            : kOther);
+    // Beside the centre, moved into the image and off the legend: a pose reaching out of the view
+    // has its centre near the image's edge or beyond it.
+    const Eigen::Vector2i at = place_label(int(std::lround(c.x())) + 12, int(std::lround(c.y())) - 16, text,
+                                           img.width, img.height, legend_box());
+    draw_label(&img, at.x(), at.y(), text, i == pick ? kPick : e.pickable ? kOutline : kOther);
   }
   draw_view_edges(&img, out.view);
   draw_legend(&img);
