@@ -234,6 +234,13 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
       {"searched again, too few side pixels to judge",
        searched_again(judged(with_sides(seen(950, 0, 0), kMinSidePx - 1, 0))), true, CandidateOutcome::accepted,
        false, false, 0.95f},
+      // ... of what is in view and not under something in front (at most verify_max_occluded).
+      {"searched again, a tenth under another, 0.9 of the rest",
+       searched_again(judged(with_sides(seen(820, 0, 100), 100, 10))), true, CandidateOutcome::accepted, false,
+       true, 0.82f * 0.9f},
+      {"searched again, a tenth under another, 0.85 of the rest",
+       searched_again(judged(with_sides(seen(765, 0, 100), 100, 10))), true, CandidateOutcome::accepted, false,
+       false, 0.765f * 0.9f},
       {"searched again, 0.9 of what is in view, a fifth out of it",
        searched_again(judged(with_sides(outside_view(seen(950, 0, 0), 0.2f), 100, 10))), true,
        CandidateOutcome::accepted, false, true, 0.76f},
@@ -352,6 +359,10 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
                from_short_region(sliding(ends_read(judged(outside_view(seen(950, 0, 0), 0.35f)), 1, 0, 0, 0), 1, 0)),
                1),
            1),
+       true, CandidateOutcome::accepted, false, true, 0.6175f},
+      {"the same, an arc, its end in view pinned past a hidden tip",
+       ends_out_of_view(
+           from_short_region(sliding(ends_read(judged(outside_view(seen(950, 0, 0), 0.35f)), 1, 0, 0, 0), 1, 0)), 1),
        true, CandidateOutcome::accepted, false, false, 0.6175f},
       {"the same, a straight tube, both ends in view, one seen ending outright",
        straight(seen_ending(
