@@ -110,8 +110,8 @@ struct LocateConfig {
   double retry_surface_cell_of_d = 0.25;
   // ... their poses are reported, and handed out only where the first searches hand out none:
   // the cycle then waits for them, and a pose of theirs is pickable only where the image confirms
-  // verify_well_seen_agreement of what is in view and its sides drop away (judged on enough side
-  // pixels). Off: never handed out.
+  // verify_well_seen_agreement of what is in view and under nothing in front, and its sides drop
+  // away (judged on enough side pixels). Off: never handed out.
   bool second_search_may_pick = true;
   double residual_noise_floor_mm = 0;  // R_th is at least this (set per frame by raise_to_noise, not a key)
   double frame_sigma_mm = 0;           // the frame's measured depth noise (set per frame, not a key)
