@@ -210,8 +210,10 @@ Image<Rgb> draw_locate_overlay(const Locator& loc, const Image<float>& depth, co
     std::snprintf(text, sizeof text, "%sR%d %.2f%s", i == pick ? "PICK " : "", i, e.score, tail);
     // Beside the centre, moved into the image and off the legend: a pose reaching out of the view
     // has its centre near the image's edge or beyond it.
-    const Eigen::Vector2i at = place_label(int(std::lround(c.x())) + 12, int(std::lround(c.y())) - 16, text,
-                                           img.width, img.height, legend_box());
+    // (A centre nearly in the camera's plane projects far out: held to a few images' width first.)
+    const auto near_pixel = [&](double v) { return int(std::lround(std::clamp(v, -1e5, 1e5))); };
+    const Eigen::Vector2i at = place_label(near_pixel(c.x()) + 12, near_pixel(c.y()) - 16, text, img.width,
+                                           img.height, legend_box());
     draw_label(&img, at.x(), at.y(), text, i == pick ? kPick : e.pickable ? kOutline : kOther);
   }
   draw_view_edges(&img, out.view);
