@@ -377,11 +377,11 @@ Decision decide(const Evidence& given, const LocateConfig& cfg) {
   // out). From a short region only for a pipe that does not slide along itself, its ends read and
   // one shown: a pipe that does, its top seen over a short length, may lie anywhere along it out
   // of the view; one that does not is placed by the bends in view and the end shown (23-planar of
-  // the zoo: 3 more pipes taken in 3 bins). A pipe that slides is placed so only by both its ends
-  // seen ending outright, none going on: a long arc whose middle runs out of the view (14-arc of
-  // seed 20: 4 more arcs taken while clearing its bin); or by its ends in view, at least one, each
-  // seen ending outright, none going on: a straight tube running out of the view at its other end
-  // (01-straight of seed 20, 900 mm tubes: 5 -> 23 taken while clearing 3 bins), a long arc the
+  // the zoo: 3 more pipes taken in 3 bins). A pipe that slides is placed so only by its ends in
+  // view, at least one, each seen ending outright, none going on, the others out of the view: a
+  // long arc whose middle runs out of the view, both ends seen (14-arc of seed 20: 4 more arcs
+  // taken while clearing its bin); a straight tube running out of the view at its other end
+  // (01-straight of seed 20, 900 mm tubes: 5 -> 23 taken while clearing 3 bins); a long arc the
   // same (14-arc of seed 20: 17 -> 36 taken in six bins, no wrong pick more; arcs were left out
   // while a tip out of the view was still read and a part in view that slides was not judged:
   // their bins reached arcs pinned 7-21 mm round themselves; docs/experiments.md).

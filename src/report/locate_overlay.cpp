@@ -260,7 +260,8 @@ Image<Rgb> draw_pose_overlay(const Image<float>& depth, const CameraInfo& cam, c
     }
   char zoom[32];
   std::snprintf(zoom, sizeof zoom, "AROUND THE POSE X%d, NEAR BRIGHT", scale);
-  draw_label(&img, std::min(ox, depth.width - 8 * int(std::strlen(zoom)) - 8), oy - 16, zoom, kPick);
+  const Eigen::Vector2i at = place_label(ox, oy - 16, zoom, img.width, img.height, PixelBox{});
+  draw_label(&img, at.x(), at.y(), zoom, kPick);
   return img;
 }
 
