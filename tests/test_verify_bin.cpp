@@ -540,6 +540,62 @@ TEST(BinAwareVerification, ASlantedTubesTipIsShownWhereItsSurfaceFacesTheCamera)
   EXPECT_EQ(ends(going_on, true).ends_pinned, 1);
 }
 
+// A tip slanting steeply away from the camera (70 degrees to the image, 200 mm over the floor)
+// hides what lies just beyond it behind its own end: both probes see the tube's own end in front
+// of where a tube going on would show, and read nothing. Read past its own tube
+// (EndReading::past_itself; the locator reads so the ends of a pipe that does not slide), the
+// floor there pins the end; a tube going on beyond it does not.
+TEST(BinAwareVerification, ATipSlantingAwayIsReadPastItsOwnTube) {
+  const double d = 40, slant = 70 * EIGEN_PI / 180, tip_z = 805, floor_z = 1005;
+  const PipeModel tube = pipe_of("S300", d, "tube"), longer = pipe_of("S600", d, "longer tube");
+  const LocateConfig cfg;
+  const LocatorModel lm = prepare_locator_model(tube, 8, cfg),
+                     lm_longer = prepare_locator_model(longer, 8, cfg);
+  const std::vector<Eigen::Vector3f>& line = lm.centreline_points;
+  Intrinsics k;
+  k.width = 640, k.height = 480, k.fx = k.fy = 570, k.cx = 320, k.cy = 240;
+  // The centreline from its first point on, across the image and away from the camera, down to
+  // the low tip at tip_z.
+  const Eigen::Vector3d down_the_leg(std::cos(slant), 0, std::sin(slant));
+  const auto placed = [&](const std::vector<Eigen::Vector3f>& centreline) {
+    const Eigen::Vector3d along = (centreline.back() - centreline.front()).normalized().cast<double>();
+    Pose pose = Pose::Identity();
+    pose.linear() = Eigen::Quaterniond::FromTwoVectors(along, down_the_leg).toRotationMatrix();
+    pose.translation() = Eigen::Vector3d(-120, 0, tip_z - 300 * std::sin(slant)) -
+                         pose.linear() * centreline.front().cast<double>();
+    return pose;
+  };
+  const auto scene = [&](const PipeModel& pipe, const Pose& pose) {
+    ProjectedMesh projected;
+    projected.reserve(pipe.mesh);
+    Image<float> drawn(k.width, k.height, 0.0f);
+    const PixelBox box = render_depth_in_box(pipe.mesh, pose, k, &drawn, &projected);
+    Image<float> depth(k.width, k.height, float(floor_z));
+    for (int y = box.y0; y <= box.y1; ++y)
+      for (int x = box.x0; x <= box.x1; ++x)
+        if (drawn.at(x, y) > 0) depth.at(x, y) = std::min(drawn.at(x, y), depth.at(x, y));
+    return depth;
+  };
+  const Pose pose = placed(line);
+  const auto low_end = [&](const Image<float>& depth, bool past_itself) {
+    Verification v;
+    EndReading how;
+    how.slanted = true;
+    how.past_itself = past_itself;
+    judge_ends(line, float(d), pose, depth, k, float(cfg.verify_tolerance_mm), &v, how);
+    return v;
+  };
+  const Image<float> alone = scene(tube, pose);
+  // The high end is pinned either way; the low one only read past its own tube.
+  EXPECT_EQ(low_end(alone, false).ends_pinned, 1);
+  EXPECT_EQ(low_end(alone, true).ends_pinned, 2);
+  EXPECT_EQ(low_end(alone, true).ends_continued, 0);
+  // A tube twice as long from the same first point goes on beyond the low end: read past the
+  // pose's own tube, the low end is not pinned.
+  const Image<float> going_on = scene(longer, placed(lm_longer.centreline_points));
+  EXPECT_EQ(low_end(going_on, true).ends_pinned, 1);
+}
+
 // A pipe that slides along itself is placed by its ends alone. Where nothing is read just beyond
 // an end (a coil's end tucked in the shadow of its own next turn), the image is read 2 D further
 // along the bend (ends_read_further): the floor there pins the end; the tube going on round the

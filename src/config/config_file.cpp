@@ -264,6 +264,7 @@ void read_locate(Section& s, LocateConfig* c) {
   s.boolean("pin_slides_by_ends", &c->pin_slides_by_ends);
   s.boolean("ends_read_further", &c->ends_read_further);
   s.boolean("ends_read_slanted", &c->ends_read_slanted);
+  s.boolean("ends_probed_past_itself", &c->ends_probed_past_itself);
   s.boolean("slides_placed_first", &c->slides_placed_first);
   s.boolean("place_slides_finely", &c->place_slides_finely);
   s.boolean("follow_slides_to_ends", &c->follow_slides_to_ends);

@@ -664,6 +664,10 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
   end_reading.tip_must_show = lm.slides.empty();
   end_reading.read_further = cfg.ends_read_further && !lm.slides.empty();
   end_reading.slanted = cfg.ends_read_slanted;
+  // Not for a pipe that slides along itself: its ends alone place it, and a probe moved out pins a
+  // tip less tightly (a tube ending anywhere short of it reads the same): six bins of every shape
+  // took 5 more pipes with 6 more wrong picks on elbows, arcs and coils (docs/experiments.md).
+  end_reading.past_itself = cfg.ends_probed_past_itself && lm.slides.empty();
   const auto read_ends_and_floor = [&](PipeEstimate* e) {
     if (cfg.pin_slides_by_ends)
       judge_ends(lm.centreline_points, lm.tube_d_mm, e->model_to_cam, ctx.depth, ctx.camera,

@@ -191,6 +191,9 @@ struct LocateConfig {
                                    // end, the image is read 2 D beyond along its bend
   bool ends_read_slanted = true;   // ... and the tip of an end the tube reaches at a slant to the
                                    // image is read where such a tube shows its surface (judge_ends)
+  bool ends_probed_past_itself = true;  // ... and beyond a tip of a pipe that does not slide, the
+                                        // image is read past where it shows the pose's own tube
+                                        // (judge_ends)
   bool slides_placed_first = true;  // ... and of two of its hypotheses the image confirms about as
                                     // well, one its ends place goes before one they show slid
                                     // (with judge_slides: its slid rivals check the pose put first)
@@ -236,6 +239,7 @@ inline void use_paper_search(LocateConfig* c) {
   c->pin_part_in_view_by_ends = false;
   c->ends_read_further = false;
   c->ends_read_slanted = false;
+  c->ends_probed_past_itself = false;
   c->judge_rolls = false;
   c->residual_rescue_of_rth = 1;
   c->short_region_min_extent_of_l = c->region_min_extent_of_l;

@@ -25,6 +25,10 @@ constexpr float kFurtherProbeOfD = 2.0f;
 constexpr float kStraightBendOfD = 20.0f;
 // judge_part_in_view fits at most this many centreline points in view (fixed buffers).
 constexpr int kMaxPartPoints = 256;
+// With past_itself, the probes beyond a tip move out this far at a time (shares of D) while the
+// nearer one shows the pose's own tube, at most this far in all.
+constexpr float kProbeShiftOfD = 0.25f;
+constexpr float kMostProbeShiftOfD = 1.5f;
 // With slanted, a tube's surface along the camera's ray is read at most 1 / this root farther from
 // its centreline than D / 2 (as a tube slanted 60 degrees to the image).
 constexpr float kLeastCosineSquared = 0.25f;
@@ -222,6 +226,34 @@ void judge_ends(const std::vector<Eigen::Vector3f>& centreline, float d, const P
     const auto probe = [&](float along, float* facing_z) {
       return probe_at(tip + along * d * out, along > 0 ? 0.5f * d : tip_surface_mm, facing_z);
     };
+    // Does the pixel of a facing point (camera frame) show the pose's own tube? It does where its
+    // ray passes within D / 2 and half a pixel's footprint of a centreline segment lying no
+    // farther than where a tube going on would show its surface (past_itself).
+    const auto shows_itself = [&](const Eigen::Vector3f& facing) {
+      if (!(facing.z() > 0)) return false;
+      const Eigen::Vector3f u = facing.normalized();
+      const float reach = 0.5f * d + 0.5f * facing.z() / float(k.fx);
+      const auto near = [&](const Eigen::Vector3f& a, const Eigen::Vector3f& b) {
+        // The segment's nearest point to the ray, across it (the ray through the origin).
+        const Eigen::Vector3f a_across = a - a.dot(u) * u, ab_across = (b - a) - (b - a).dot(u) * u;
+        const float len2 = ab_across.squaredNorm();
+        const float s = len2 > 0 ? std::clamp(-a_across.dot(ab_across) / len2, 0.0f, 1.0f) : 0.0f;
+        const float surface_z = (a + s * (b - a)).z() - 0.5f * d;
+        return (a_across + s * ab_across).norm() < reach && surface_z < facing.z() + tol;
+      };
+      for (int i = 1; i < n; ++i)
+        if (near(r * centreline[i - 1] + t, r * centreline[i] + t)) return true;
+      return false;
+    };
+    const auto facing_beyond = [&](float along) {
+      const Eigen::Vector3f centre = tip + along * d * out;
+      return Eigen::Vector3f(centre - 0.5f * d * centre.normalized());
+    };
+    float shift = 0;
+    while (how.past_itself && shift <= kMostProbeShiftOfD &&
+           shows_itself(facing_beyond(kEndProbesOfD[0] + shift)))
+      shift += kProbeShiftOfD;
+    const bool only_itself = shift > kMostProbeShiftOfD;
     int free = 0, going_on = 0, probes = 0;
     const auto read = [&](float zo, float facing_z) {
       if (!(zo > 0) || zo < facing_z - tol) return;  // no reading, or something in front
@@ -230,8 +262,9 @@ void judge_ends(const std::vector<Eigen::Vector3f>& centreline, float d, const P
       going_on += zo <= facing_z + tol;
     };
     for (const float beyond : kEndProbesOfD) {
+      if (only_itself) break;
       float facing_z = 0;
-      const float zo = probe(beyond, &facing_z);
+      const float zo = probe(beyond + shift, &facing_z);
       read(zo, facing_z);
     }
     // Beyond the paper: a pipe that slides along itself is placed by its ends alone. Where both

@@ -114,6 +114,11 @@ struct EndReading {
   // camera's ray through its centreline, D / 2 over the cosine of its slant from it (read D / 2
   // from it, the tube's own top in front hides a tip the image shows).
   bool slanted = false;
+  // Beyond the paper: where the nearer probe beyond a tip shows the pose's own tube (a leg slanting
+  // steeply away from the camera hides what lies just beyond its tip behind its own end), both
+  // probes move out together, D / 4 at a time, up to 1.5 D; a tip whose probes show its own tube
+  // that far has no reading beyond it.
+  bool past_itself = false;
 };
 void judge_ends(const std::vector<Eigen::Vector3f>& centreline, float d_mm, const Pose& model_to_cam,
                 const Image<float>& depth_mm, const Intrinsics& k, float tolerance_mm, Verification* v,
