@@ -577,7 +577,7 @@ TEST(BinAwareVerification, ATipSlantingAwayIsReadPastItsOwnTube) {
     return depth;
   };
   const Pose pose = placed(line);
-  const auto low_end = [&](const Image<float>& depth, bool past_itself) {
+  const auto ends = [&](const Image<float>& depth, bool past_itself) {
     Verification v;
     EndReading how;
     how.slanted = true;
@@ -587,13 +587,13 @@ TEST(BinAwareVerification, ATipSlantingAwayIsReadPastItsOwnTube) {
   };
   const Image<float> alone = scene(tube, pose);
   // The high end is pinned either way; the low one only read past its own tube.
-  EXPECT_EQ(low_end(alone, false).ends_pinned, 1);
-  EXPECT_EQ(low_end(alone, true).ends_pinned, 2);
-  EXPECT_EQ(low_end(alone, true).ends_continued, 0);
+  EXPECT_EQ(ends(alone, false).ends_pinned, 1);
+  EXPECT_EQ(ends(alone, true).ends_pinned, 2);
+  EXPECT_EQ(ends(alone, true).ends_continued, 0);
   // A tube twice as long from the same first point goes on beyond the low end: read past the
   // pose's own tube, the low end is not pinned.
   const Image<float> going_on = scene(longer, placed(lm_longer.centreline_points));
-  EXPECT_EQ(low_end(going_on, true).ends_pinned, 1);
+  EXPECT_EQ(ends(going_on, true).ends_pinned, 1);
 }
 
 // A pipe that slides along itself is placed by its ends alone. Where nothing is read just beyond
