@@ -482,6 +482,39 @@ TEST(BinAwareVerification, AnEndHiddenUnderAPipeAcrossIsNotShownEnding) {
   EXPECT_EQ(ends(covered, true).ends_seen_ending, 1);
 }
 
+// A 640 x 480 camera, f 570 px, its principal point in the middle.
+Intrinsics camera_640() {
+  Intrinsics k;
+  k.width = 640, k.height = 480, k.fx = k.fy = 570, k.cx = 320, k.cy = 240;
+  return k;
+}
+
+// A pose putting a straight tube's centreline, from its first point on, across the image and away
+// from the camera at `slant` to the image, from a high end 120 mm left of the image's centre and
+// 300 mm along the slant above `low_z` (where a 300 mm tube's low tip lies).
+Pose slanting_away(const std::vector<Eigen::Vector3f>& centreline, double slant, double low_z) {
+  const Eigen::Vector3d down_the_leg(std::cos(slant), 0, std::sin(slant));
+  const Eigen::Vector3d along = (centreline.back() - centreline.front()).normalized().cast<double>();
+  Pose pose = Pose::Identity();
+  pose.linear() = Eigen::Quaterniond::FromTwoVectors(along, down_the_leg).toRotationMatrix();
+  pose.translation() = Eigen::Vector3d(-120, 0, low_z - 300 * std::sin(slant)) -
+                       pose.linear() * centreline.front().cast<double>();
+  return pose;
+}
+
+// The depth image of `pipe` at `pose` over a floor floor_z away.
+Image<float> over_floor(const PipeModel& pipe, const Pose& pose, const Intrinsics& k, float floor_z) {
+  ProjectedMesh projected;
+  projected.reserve(pipe.mesh);
+  Image<float> drawn(k.width, k.height, 0.0f);
+  const PixelBox box = render_depth_in_box(pipe.mesh, pose, k, &drawn, &projected);
+  Image<float> depth(k.width, k.height, floor_z);
+  for (int y = box.y0; y <= box.y1; ++y)
+    for (int x = box.x0; x <= box.x1; ++x)
+      if (drawn.at(x, y) > 0) depth.at(x, y) = std::min(drawn.at(x, y), depth.at(x, y));
+  return depth;
+}
+
 // The tip of an end the tube reaches at a slant to the image (a 3-D pipe's leg coming down to the
 // floor, 50 degrees) shows the camera its surface D / 2 over the cosine of the slant from the
 // centreline: read D / 2 from it, the tube's own top in front hides the tip, and the end the
@@ -495,30 +528,13 @@ TEST(BinAwareVerification, ASlantedTubesTipIsShownWhereItsSurfaceFacesTheCamera)
                      lm_longer = prepare_locator_model(longer, 8, cfg);
   const std::vector<Eigen::Vector3f>& line = lm.centreline_points;
   const float tol = float(cfg.verify_tolerance_mm);
-  Intrinsics k;
-  k.width = 640, k.height = 480, k.fx = k.fy = 570, k.cx = 320, k.cy = 240;
-  // A tube's centreline from its first point on, across the image and away from the camera, from
-  // a high end 120 mm left of the image's centre (the floor 1005 mm away, the tube's low tip 40 mm
-  // over it).
-  const Eigen::Vector3d down_the_leg(std::cos(slant), 0, std::sin(slant));
+  const Intrinsics k = camera_640();
+  // The floor 1005 mm away, the tube's low tip 40 mm over it.
   const auto placed = [&](const std::vector<Eigen::Vector3f>& centreline) {
-    const Eigen::Vector3d along = (centreline.back() - centreline.front()).normalized().cast<double>();
-    Pose pose = Pose::Identity();
-    pose.linear() = Eigen::Quaterniond::FromTwoVectors(along, down_the_leg).toRotationMatrix();
-    pose.translation() = Eigen::Vector3d(-120, 0, 965 - 300 * std::sin(slant)) -
-                         pose.linear() * centreline.front().cast<double>();
-    return pose;
+    return slanting_away(centreline, slant, 965);
   };
   const auto scene = [&](const PipeModel& pipe, const Pose& pose) {
-    ProjectedMesh projected;
-    projected.reserve(pipe.mesh);
-    Image<float> drawn(k.width, k.height, 0.0f);
-    const PixelBox box = render_depth_in_box(pipe.mesh, pose, k, &drawn, &projected);
-    Image<float> depth(k.width, k.height, 1005.0f);
-    for (int y = box.y0; y <= box.y1; ++y)
-      for (int x = box.x0; x <= box.x1; ++x)
-        if (drawn.at(x, y) > 0) depth.at(x, y) = std::min(drawn.at(x, y), depth.at(x, y));
-    return depth;
+    return over_floor(pipe, pose, k, 1005.0f);
   };
   const Pose pose = placed(line);
   const auto ends = [&](const Image<float>& depth, bool slanted) {
@@ -552,29 +568,12 @@ TEST(BinAwareVerification, ATipSlantingAwayIsReadPastItsOwnTube) {
   const LocatorModel lm = prepare_locator_model(tube, 8, cfg),
                      lm_longer = prepare_locator_model(longer, 8, cfg);
   const std::vector<Eigen::Vector3f>& line = lm.centreline_points;
-  Intrinsics k;
-  k.width = 640, k.height = 480, k.fx = k.fy = 570, k.cx = 320, k.cy = 240;
-  // The centreline from its first point on, across the image and away from the camera, down to
-  // the low tip at tip_z.
-  const Eigen::Vector3d down_the_leg(std::cos(slant), 0, std::sin(slant));
+  const Intrinsics k = camera_640();
   const auto placed = [&](const std::vector<Eigen::Vector3f>& centreline) {
-    const Eigen::Vector3d along = (centreline.back() - centreline.front()).normalized().cast<double>();
-    Pose pose = Pose::Identity();
-    pose.linear() = Eigen::Quaterniond::FromTwoVectors(along, down_the_leg).toRotationMatrix();
-    pose.translation() = Eigen::Vector3d(-120, 0, tip_z - 300 * std::sin(slant)) -
-                         pose.linear() * centreline.front().cast<double>();
-    return pose;
+    return slanting_away(centreline, slant, tip_z);
   };
   const auto scene = [&](const PipeModel& pipe, const Pose& pose) {
-    ProjectedMesh projected;
-    projected.reserve(pipe.mesh);
-    Image<float> drawn(k.width, k.height, 0.0f);
-    const PixelBox box = render_depth_in_box(pipe.mesh, pose, k, &drawn, &projected);
-    Image<float> depth(k.width, k.height, float(floor_z));
-    for (int y = box.y0; y <= box.y1; ++y)
-      for (int x = box.x0; x <= box.x1; ++x)
-        if (drawn.at(x, y) > 0) depth.at(x, y) = std::min(drawn.at(x, y), depth.at(x, y));
-    return depth;
+    return over_floor(pipe, pose, k, float(floor_z));
   };
   const Pose pose = placed(line);
   const auto ends = [&](const Image<float>& depth, bool past_itself) {
