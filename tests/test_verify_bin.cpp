@@ -515,45 +515,53 @@ Image<float> over_floor(const PipeModel& pipe, const Pose& pose, const Intrinsic
   return depth;
 }
 
+// A 300 mm tube D thick slanting away from the camera (slanting_away), over a floor floor_z away:
+// its centreline and pose, the image of it alone, and the image of a tube twice as long from the
+// same first point (beyond the low end it goes on).
+struct SlantedTubeScenes {
+  std::vector<Eigen::Vector3f> line;
+  Pose pose;
+  Image<float> alone, going_on;
+};
+SlantedTubeScenes slanted_tube_scenes(double d, double slant, double low_z, float floor_z,
+                                      const Intrinsics& k) {
+  const LocateConfig cfg;
+  const PipeModel tube = pipe_of("S300", d, "tube"), longer = pipe_of("S600", d, "longer tube");
+  SlantedTubeScenes s;
+  s.line = prepare_locator_model(tube, 8, cfg).centreline_points;
+  s.pose = slanting_away(s.line, slant, low_z);
+  s.alone = over_floor(tube, s.pose, k, floor_z);
+  const LocatorModel lm_longer = prepare_locator_model(longer, 8, cfg);
+  s.going_on = over_floor(longer, slanting_away(lm_longer.centreline_points, slant, low_z), k, floor_z);
+  return s;
+}
+
 // The tip of an end the tube reaches at a slant to the image (a 3-D pipe's leg coming down to the
 // floor, 50 degrees) shows the camera its surface D / 2 over the cosine of the slant from the
 // centreline: read D / 2 from it, the tube's own top in front hides the tip, and the end the
 // image shows ending is not shown (ends_read_slanted). A tube going on beyond such an end is not
 // pinned by reading it so.
 TEST(BinAwareVerification, ASlantedTubesTipIsShownWhereItsSurfaceFacesTheCamera) {
-  const double d = 40, slant = 50 * EIGEN_PI / 180;
-  const PipeModel tube = pipe_of("S300", d, "tube"), longer = pipe_of("S600", d, "longer tube");
-  const LocateConfig cfg;
-  const LocatorModel lm = prepare_locator_model(tube, 8, cfg),
-                     lm_longer = prepare_locator_model(longer, 8, cfg);
-  const std::vector<Eigen::Vector3f>& line = lm.centreline_points;
-  const float tol = float(cfg.verify_tolerance_mm);
+  const double d = 40;
+  const float tol = float(LocateConfig().verify_tolerance_mm);
   const Intrinsics k = camera_640();
   // The floor 1005 mm away, the tube's low tip 40 mm over it.
-  const auto placed = [&](const std::vector<Eigen::Vector3f>& centreline) {
-    return slanting_away(centreline, slant, 965);
-  };
-  const auto scene = [&](const PipeModel& pipe, const Pose& pose) {
-    return over_floor(pipe, pose, k, 1005.0f);
-  };
-  const Pose pose = placed(line);
+  const SlantedTubeScenes s = slanted_tube_scenes(d, 50 * EIGEN_PI / 180, 965, 1005.0f, k);
   const auto ends = [&](const Image<float>& depth, bool slanted) {
     Verification v;
     EndReading how;
     how.tip_must_show = true;
     how.slanted = slanted;
-    judge_ends(line, float(d), pose, depth, k, tol, &v, how);
+    judge_ends(s.line, float(d), s.pose, depth, k, tol, &v, how);
     return v;
   };
-  const Image<float> alone = scene(tube, pose);
   // The high end shown ending either way; the low one only where read slanted.
-  EXPECT_EQ(ends(alone, false).ends_pinned, 1);
-  EXPECT_EQ(ends(alone, true).ends_pinned, 2);
-  EXPECT_EQ(ends(alone, true).ends_continued, 0);
+  EXPECT_EQ(ends(s.alone, false).ends_pinned, 1);
+  EXPECT_EQ(ends(s.alone, true).ends_pinned, 2);
+  EXPECT_EQ(ends(s.alone, true).ends_continued, 0);
   // A tube twice as long from the same first point: beyond the low end it goes on.
-  const Image<float> going_on = scene(longer, placed(lm_longer.centreline_points));
-  EXPECT_EQ(ends(going_on, false).ends_pinned, 1);
-  EXPECT_EQ(ends(going_on, true).ends_pinned, 1);
+  EXPECT_EQ(ends(s.going_on, false).ends_pinned, 1);
+  EXPECT_EQ(ends(s.going_on, true).ends_pinned, 1);
 }
 
 // A tip slanting steeply away from the camera (70 degrees to the image, 200 mm over the floor)
@@ -562,37 +570,26 @@ TEST(BinAwareVerification, ASlantedTubesTipIsShownWhereItsSurfaceFacesTheCamera)
 // (EndReading::past_itself; the locator reads so the ends of a pipe that does not slide), the
 // floor there pins the end; a tube going on beyond it does not.
 TEST(BinAwareVerification, ATipSlantingAwayIsReadPastItsOwnTube) {
-  const double d = 40, slant = 70 * EIGEN_PI / 180, tip_z = 805, floor_z = 1005;
-  const PipeModel tube = pipe_of("S300", d, "tube"), longer = pipe_of("S600", d, "longer tube");
-  const LocateConfig cfg;
-  const LocatorModel lm = prepare_locator_model(tube, 8, cfg),
-                     lm_longer = prepare_locator_model(longer, 8, cfg);
-  const std::vector<Eigen::Vector3f>& line = lm.centreline_points;
+  const double d = 40;
+  const float tol = float(LocateConfig().verify_tolerance_mm);
   const Intrinsics k = camera_640();
-  const auto placed = [&](const std::vector<Eigen::Vector3f>& centreline) {
-    return slanting_away(centreline, slant, tip_z);
-  };
-  const auto scene = [&](const PipeModel& pipe, const Pose& pose) {
-    return over_floor(pipe, pose, k, float(floor_z));
-  };
-  const Pose pose = placed(line);
+  // The low tip 805 mm away, the floor 1005 mm.
+  const SlantedTubeScenes s = slanted_tube_scenes(d, 70 * EIGEN_PI / 180, 805, 1005.0f, k);
   const auto ends = [&](const Image<float>& depth, bool past_itself) {
     Verification v;
     EndReading how;
     how.slanted = true;
     how.past_itself = past_itself;
-    judge_ends(line, float(d), pose, depth, k, float(cfg.verify_tolerance_mm), &v, how);
+    judge_ends(s.line, float(d), s.pose, depth, k, tol, &v, how);
     return v;
   };
-  const Image<float> alone = scene(tube, pose);
   // The high end is pinned either way; the low one only read past its own tube.
-  EXPECT_EQ(ends(alone, false).ends_pinned, 1);
-  EXPECT_EQ(ends(alone, true).ends_pinned, 2);
-  EXPECT_EQ(ends(alone, true).ends_continued, 0);
+  EXPECT_EQ(ends(s.alone, false).ends_pinned, 1);
+  EXPECT_EQ(ends(s.alone, true).ends_pinned, 2);
+  EXPECT_EQ(ends(s.alone, true).ends_continued, 0);
   // A tube twice as long from the same first point goes on beyond the low end: read past the
   // pose's own tube, the low end is not pinned.
-  const Image<float> going_on = scene(longer, placed(lm_longer.centreline_points));
-  EXPECT_EQ(ends(going_on, true).ends_pinned, 1);
+  EXPECT_EQ(ends(s.going_on, true).ends_pinned, 1);
 }
 
 // A pipe that slides along itself is placed by its ends alone. Where nothing is read just beyond

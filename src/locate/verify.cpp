@@ -212,11 +212,15 @@ void judge_ends(const std::vector<Eigen::Vector3f>& centreline, float d, const P
     const float sine =
         how.slanted && tip.z() > 0 ? std::min(std::abs(out.dot(tip.normalized())), 1.0f) : 0.0f;
     const float tip_surface_mm = 0.5f * d / std::sqrt(std::max(1.0f - sine * sine, kLeastCosineSquared));
-    // The depth measured where the tube's surface around the centreline point `centre`, `surface_mm`
-    // from it, faces the camera, and that surface's depth; no reading: 0.
+    // Where the tube's surface around the centreline point `centre`, `surface_mm` from it, faces
+    // the camera ...
+    const auto facing_of = [](const Eigen::Vector3f& centre, float surface_mm) {
+      return Eigen::Vector3f(centre - surface_mm * centre.normalized());
+    };
+    // ... the depth measured there, and that surface's depth; no reading: 0.
     const auto probe_at = [&](const Eigen::Vector3f& centre, float surface_mm, float* facing_z) {
       if (!(centre.z() > 0)) return 0.0f;
-      const Eigen::Vector3f facing = centre - surface_mm * centre.normalized();
+      const Eigen::Vector3f facing = facing_of(centre, surface_mm);
       const Eigen::Vector2d px = k.project(facing.cast<double>());
       const int x = int(std::lround(px.x())), y = int(std::lround(px.y()));
       *facing_z = facing.z();
@@ -241,17 +245,17 @@ void judge_ends(const std::vector<Eigen::Vector3f>& centreline, float d, const P
         const float surface_z = (a + s * (b - a)).z() - 0.5f * d;
         return (a_across + s * ab_across).norm() < reach && surface_z < facing.z() + tol;
       };
-      for (int i = 1; i < n; ++i)
-        if (near(r * centreline[i - 1] + t, r * centreline[i] + t)) return true;
+      Eigen::Vector3f a = r * centreline[0] + t;
+      for (int i = 1; i < n; ++i) {
+        const Eigen::Vector3f b = r * centreline[i] + t;
+        if (near(a, b)) return true;
+        a = b;
+      }
       return false;
-    };
-    const auto facing_beyond = [&](float along) {
-      const Eigen::Vector3f centre = tip + along * d * out;
-      return Eigen::Vector3f(centre - 0.5f * d * centre.normalized());
     };
     float shift = 0;
     while (how.past_itself && shift <= kMostProbeShiftOfD &&
-           shows_itself(facing_beyond(kEndProbesOfD[0] + shift)))
+           shows_itself(facing_of(tip + (kEndProbesOfD[0] + shift) * d * out, 0.5f * d)))
       shift += kProbeShiftOfD;
     const bool only_itself = shift > kMostProbeShiftOfD;
     int free = 0, going_on = 0, probes = 0;
