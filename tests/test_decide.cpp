@@ -302,9 +302,18 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
       {"a third out of the view, well seen, both ends out of it",
        ends_out_of_view(ends_read(judged(outside_view(seen(950, 0, 0), 0.35f)), 0, 0, 0, 0), 2), true,
        CandidateOutcome::accepted, false, true, 0.6175f},
-      {"the same, one end out of it, the other not pinned",
+      // ... or one end out of it and the other neither pinned nor going on: it shows no more
+      // than an end out of the view (end_unread_as_out_of_view) ...
+      {"the same, one end out of it, the other neither pinned nor going on",
        ends_out_of_view(ends_read(judged(outside_view(seen(950, 0, 0), 0.35f)), 0, 0, 0, 0), 1), true,
+       CandidateOutcome::accepted, false, true, 0.6175f},
+      // ... but not where the tube goes on beyond the end in view, nor for a pipe that slides.
+      {"the same, the tube going on beyond the end in view",
+       ends_out_of_view(ends_read(judged(outside_view(seen(950, 0, 0), 0.35f)), 0, 1, 0, 0), 1), true,
        CandidateOutcome::accepted, false, false, 0.6175f},
+      {"the same, the end in view neither pinned nor going on, a pipe that slides",
+       ends_out_of_view(sliding(ends_read(judged(outside_view(seen(950, 0, 0), 0.35f)), 0, 0, 0, 0), 0, 0), 1),
+       true, CandidateOutcome::accepted, true, false, 0.6175f * kAmbiguousScoreFactor},
       {"the same, both ends out of it, what is in view not well seen",
        ends_out_of_view(ends_read(judged(outside_view(seen(880, 0, 0), 0.35f)), 0, 0, 0, 0), 2), true,
        CandidateOutcome::accepted, false, false, 0.572f},
@@ -576,6 +585,11 @@ TEST(Decide, ThresholdsComeFromTheConfig) {
   cfg.verify_max_occluded = 0.3;
   EXPECT_TRUE(decide(judged(seen(800, 0, 200)), cfg).pickable);
   EXPECT_TRUE(decide(judged(outside_view(seen(950, 0, 0), 0.45f)), cfg).pickable);  // well seen
+  const Evidence one_end_out =
+      ends_out_of_view(ends_read(judged(outside_view(seen(950, 0, 0), 0.35f)), 0, 0, 0, 0), 1);
+  EXPECT_TRUE(decide(one_end_out, cfg).pickable);
+  cfg.end_unread_as_out_of_view = false;  // off: the end in view must be pinned
+  EXPECT_FALSE(decide(one_end_out, cfg).pickable);
   cfg.verify_max_outside_view_well_seen = 0.4;
   EXPECT_FALSE(decide(judged(outside_view(seen(950, 0, 0), 0.45f)), cfg).pickable);
   cfg.verify_max_outside_view_well_seen = 0;  // off: the first rule alone

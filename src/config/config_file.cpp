@@ -269,6 +269,7 @@ void read_locate(Section& s, LocateConfig* c) {
   s.boolean("place_slides_finely", &c->place_slides_finely);
   s.boolean("follow_slides_to_ends", &c->follow_slides_to_ends);
   s.boolean("pin_part_in_view_by_ends", &c->pin_part_in_view_by_ends);
+  s.boolean("end_unread_as_out_of_view", &c->end_unread_as_out_of_view);
   s.integer("max_candidates", &c->max_candidates, 1, 256, "regions");
   s.integer("max_results", &c->max_results, 0, 256, "poses (0: every pose found)");
   s.integer("threads", &c->threads, 1, 64, "threads");

@@ -207,6 +207,10 @@ struct LocateConfig {
                                          // slides along the pipe (an arc's or a coil's loop) is
                                          // pickable only where an end in view is seen ending
                                          // outright and no end goes on (judge_part_in_view)
+  bool end_unread_as_out_of_view = true;  // ... and a pose of a pipe that does not slide, reaching
+                                          // out of the view at one end, whose end in view the image
+                                          // neither pins nor shows going on, is placed by the bends
+                                          // in view as where both ends lie out of it
 
   // The paper's comparison: ICP on points sampled from the whole visible surface instead of the
   // Z-ridge (eval-bop --match surface).
@@ -237,6 +241,7 @@ inline void use_paper_search(LocateConfig* c) {
   c->place_slides_finely = false;
   c->follow_slides_to_ends = false;
   c->pin_part_in_view_by_ends = false;
+  c->end_unread_as_out_of_view = false;
   c->ends_read_further = false;
   c->ends_read_slanted = false;
   c->ends_probed_past_itself = false;
