@@ -400,10 +400,11 @@ Decision decide(const Evidence& given, const LocateConfig& cfg) {
       (e.model_slides ? e.best.ends_seen_ending >= 1 && ends_seen_or_out >= 2 && e.best.ends_continued == 0
                       : e.best.ends_pinned > 0);
   // Of a pipe that does not slide, an end in view the image neither pins nor shows going on (no
-  // reading there, or something in front) shows no more than one out of the view: with the other
-  // out of the view, the bends in view place it as where both are (end_unread_as_out_of_view; a
-  // 3-D bend, 0.4 mm off, agreeing 0.94 where 28 % of it lay out of the view, was its bin's last
-  // pick withheld; six bins of every shape: 10 more pipes taken, no wrong pick more).
+  // reading there, or something in front) tells no more than an end out of the view. With the
+  // other end out of the view, the bends in view place it, as they do where both ends lie out of
+  // it (end_unread_as_out_of_view; a 3-D bend 0.4 mm off, agreeing 0.94, 28 % out of the view,
+  // was withheld on its bin's last frame; six bins of every shape: 10 more pipes taken, no wrong
+  // pick more).
   const bool ends_unshown_or_out =
       e.best.ends_out_of_view >= 2 ||
       (cfg.end_unread_as_out_of_view && !e.model_slides && !e.best.part_in_view_slides &&
