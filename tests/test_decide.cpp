@@ -114,6 +114,13 @@ Evidence turn_unsure(Evidence e) {
   return e;
 }
 
+// The best reaches out of the view, and a pose putting another part of the pipe where its part in
+// view is seen is confirmed about as well on the pixels read (judge_other_parts).
+Evidence other_part_unsure(Evidence e) {
+  e.other_part_unsure = true;
+  return e;
+}
+
 // Found by the second search of its region, on its whole top surface (retry_surface_cell_of_d).
 Evidence searched_again(Evidence e) {
   e.searched_again = true;
@@ -515,6 +522,9 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
        CandidateOutcome::accepted, true, false, 0.45f},
       // A turn about its own length the image does not tell apart: not known to the pick's tolerance.
       {"its turn about its length not told", turn_unsure(judged(seen(900, 0, 0))), true,
+       CandidateOutcome::accepted, true, false, 0.45f},
+      // Another part of the pipe could be the part in view (an S's other bend): not placed.
+      {"another part of it as well in view", other_part_unsure(judged(seen(900, 0, 0))), true,
        CandidateOutcome::accepted, true, false, 0.45f},
       // A pipe that slides along itself (an arc, a coil, a straight run) is placed by its ends.
       {"sliding, an end pinned", sliding(judged(seen(900, 0, 0)), 1, 0), true, CandidateOutcome::accepted,

@@ -1,6 +1,7 @@
 // Verification that knows the bin: no pose below the floor, and a smooth blob is not a pipe.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -377,6 +378,62 @@ TEST(BinAwareVerification, APartInViewThatSlidesAlongThePipeIsToldFromABendInVie
   EXPECT_TRUE(slides_in("B200r80", &left_half));
   EXPECT_FALSE(slides_in("B200r80", nullptr));
   EXPECT_FALSE(slides_in("S80,B90r30,S80", &left_half));
+}
+
+// Of an S whose two bends nearly match (the zoo's 11-S-asym of seed 22, in units of D), one bend in
+// view could be either (other_parts_in_view): the motion found takes the bend in view onto the
+// other one. An L's one bend has no other part it could be; nor has a pose wholly in the view.
+TEST(BinAwareVerification, AnSsOtherBendIsAnotherPartItsBendInViewCouldBe) {
+  const LocateConfig cfg;
+  Intrinsics k;
+  k.width = 640, k.height = 480, k.fx = k.fy = 570, k.cx = 320, k.cy = 240;
+  const auto in_d = [](double d, std::initializer_list<double> v) {
+    std::vector<double> out;
+    for (const double x : v) out.push_back(x * d);
+    return out;
+  };
+  for (const double d : {10.0, 40.0}) {
+    const std::vector<double> s = in_d(d, {3.23, 3.78, 0.28, 3.84, 3.11}), l = in_d(d, {2, 4, 12});
+    const std::string s_bend = "S" + std::to_string(s[0]) + ",B116r" + std::to_string(s[1]) + ",S" +
+                               std::to_string(s[2]) + ",B-106r" + std::to_string(s[3]) + ",S" +
+                               std::to_string(s[4]);
+    const std::string l_bend =
+        "S" + std::to_string(l[0]) + ",B90r" + std::to_string(l[1]) + ",S" + std::to_string(l[2]);
+    // The pipe's middle 900 mm ahead; the view holds the first 45 % of its centreline.
+    const auto other_parts = [&](const std::string& path, bool cut, std::vector<Pose>* motions) {
+      const LocatorModel lm = prepare_locator_model(pipe_of(path, d, path), 8, cfg);
+      const std::vector<Eigen::Vector3f>& line = lm.centreline_points;
+      Pose pose = Pose::Identity();
+      pose.translation() = Eigen::Vector3d(0, 0, 900) - line[line.size() / 2].cast<double>();
+      const double x_cut = k.project(pose * line[line.size() * 45 / 100].cast<double>()).x();
+      const double x_first = k.project(pose * line.front().cast<double>()).x();
+      PixelBox view{0, 0, k.width - 1, k.height - 1};
+      if (x_first < x_cut)
+        view.x1 = int(x_cut);
+      else
+        view.x0 = int(x_cut);
+      motions->assign(2, Pose::Identity());
+      const int n = other_parts_in_view(line, lm.centreline_step_mm, float(d), float(d), 0.25f * float(d),
+                                        pose, k, cut ? &view : nullptr, motions->data(), 2);
+      motions->resize(std::size_t(n));
+      return line;
+    };
+    std::vector<Pose> motions;
+    const std::vector<Eigen::Vector3f> line = other_parts(s_bend, true, &motions);
+    ASSERT_GE(motions.size(), 1u) << d;
+    // The first bend's middle moves more than 2 D, onto the second half of the centreline.
+    const Eigen::Vector3d first_bend = line[line.size() * 33 / 100].cast<double>();
+    const Eigen::Vector3d moved = motions[0] * first_bend;
+    double nearest = 1e9;
+    for (std::size_t i = line.size() / 2; i < line.size(); ++i)
+      nearest = std::min(nearest, (moved - line[i].cast<double>()).norm());
+    EXPECT_LT(nearest, 0.25 * d) << d;
+    EXPECT_GT((moved - first_bend).norm(), 2 * d) << d;
+    other_parts(s_bend, false, &motions);
+    EXPECT_TRUE(motions.empty()) << d;
+    other_parts(l_bend, true, &motions);
+    EXPECT_TRUE(motions.empty()) << d;
+  }
 }
 
 // On a simulated bin (floor at z = 0) the floor is found, a pipe's pose lies on it, and the same

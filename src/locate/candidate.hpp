@@ -59,6 +59,13 @@ constexpr double kTellingToleranceOfSigma = 3.0;
 // The depth difference that makes a pixel telling, and within which a reading speaks for a render.
 float telling_tolerance_mm(const LocateConfig& cfg);
 
+// judge_other_parts: at most this many other parts of the pipe a pose's part in view could be are
+// judged ...
+constexpr int kMostOtherParts = 2;
+// ... where the part in view, moved onto it, lies within this * D of it (RMS): as a model's near
+// twin lands within a quarter of D of itself (near_symmetry_tolerance_of_diameter).
+constexpr float kOtherPartRmsOfD = 0.25f;
+
 // Why an accepted pose is not handed out: one bit per check it fails (0 for a pickable pose). The
 // overlay names the first bit set, in this order; `locate` and the timing log name them all.
 enum Withheld : unsigned {
@@ -180,6 +187,7 @@ struct Evidence {
   Verification best, second;                      // ... more than ambiguity_pose_mm from it
   TellingPixels told;                             // ... the pixels where the image tells them apart
   bool roll_unsure = false;                       // ... the turn about its length not told (judge_rolls)
+  bool other_part_unsure = false;  // ... another part of the pipe in view as well (judge_other_parts)
   bool twin_unresolved = false;  // ... further from the camera than it resolves the near twin
   bool rival_ends_apart = true;  // ... their ends lie where judge_ends tells them (ends_tell_apart)
 };
@@ -359,6 +367,9 @@ struct Hypotheses {
   // A hypothesis turned from another about the pipe's length (judge_rolls) is confirmed about as
   // well as the best and lies more than roll_ambiguity_mm from it.
   bool roll_unsure = false;
+  // The best reaches out of the view, and a pose putting another part of the pipe where its part
+  // in view is seen is confirmed about as well on the pixels read (judge_other_parts).
+  bool other_part_unsure = false;
 };
 Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& in,
                             const ObservedRidge& observed, const RidgeFits& fitted, const Deadline& deadline,

@@ -176,6 +176,9 @@ struct LocateConfig {
                                   // than this (the pick-correct tolerance): ambiguous ...
   bool tell_rolls_apart = true;   // ... unless, where the two differ, the image speaks for the found
                                   // pose and hardly for the turn (as tell_rivals_apart)
+  bool judge_other_parts = true;  // a pose reaching out of the view, no end pinned, none going on,
+                                  // put with another part of the pipe where its part in view is
+                                  // seen (an S's other bend): as good on the pixels read, ambiguous
   // A pose further from the camera than where one pixel covers its near twin's spread everywhere
   // (twin_resolved_within_mm): ambiguous, whatever its pixels say.
   bool twin_beyond_resolution_ambiguous = true;
@@ -246,6 +249,7 @@ inline void use_paper_search(LocateConfig* c) {
   c->ends_read_slanted = false;
   c->ends_probed_past_itself = false;
   c->judge_rolls = false;
+  c->judge_other_parts = false;
   c->residual_rescue_of_rth = 1;
   c->short_region_min_extent_of_l = c->region_min_extent_of_l;
   c->leftover_regions = false;

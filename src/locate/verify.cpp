@@ -25,6 +25,8 @@ constexpr float kFurtherProbeOfD = 2.0f;
 constexpr float kStraightBendOfD = 20.0f;
 // judge_part_in_view fits at most this many centreline points in view (fixed buffers).
 constexpr int kMaxPartPoints = 256;
+// other_parts_in_view keeps at most this many placements.
+constexpr int kMaxOtherParts = 4;
 // With past_itself, the probes beyond a tip move out this far at a time (shares of D) while the
 // nearer one shows the pose's own tube, at most this far in all.
 constexpr float kProbeShiftOfD = 0.25f;
@@ -300,50 +302,135 @@ void judge_ends(const std::vector<Eigen::Vector3f>& centreline, float d, const P
   }
 }
 
+namespace {
+
+// The centreline's points in the sensor's view (every stride-th of them where there are more
+// than kMaxPartPoints: a model's centreline has about 64): their indices, how many lie in view in
+// all and their mean depth.
+struct PartInView {
+  std::array<int, kMaxPartPoints> index;
+  int count = 0, in_view = 0, stride = 1;
+  double mean_z_mm = 0;
+};
+void centreline_in_view(const std::vector<Eigen::Vector3f>& centreline, const Pose& model_to_cam,
+                        const Intrinsics& k, const PixelBox* view, PartInView* part) {
+  const int n = int(centreline.size());
+  const PixelBox seen = view_or_image(view, k.width, k.height);
+  part->stride = (n + kMaxPartPoints - 1) / kMaxPartPoints;
+  part->count = part->in_view = 0;
+  double z_sum = 0;
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Vector3d p = model_to_cam * centreline[std::size_t(i)].cast<double>();
+    const Eigen::Vector2d px = k.project(p);
+    if (!(p.z() > 0 && in_view(seen, px.x(), px.y()))) continue;
+    ++part->in_view, z_sum += p.z();
+    if (i % part->stride == 0) part->index[std::size_t(part->count++)] = i;
+  }
+  part->mean_z_mm = part->in_view > 0 ? z_sum / part->in_view : 0;
+}
+
+// The rigid motion taking the points of the part in view onto those `sign` * i + offset along the
+// centreline (those falling off its ends left out), and the RMS distance it leaves them at.
+// Returns the pairs fitted.
+int part_moved(const std::vector<Eigen::Vector3f>& centreline, const PartInView& part, int sign, int offset,
+               Pose* motion, double* rms_mm) {
+  const int n = int(centreline.size());
+  std::array<Eigen::Vector3f, kMaxPartPoints> from, to;
+  int pairs = 0;
+  for (int c = 0; c < part.count; ++c) {
+    const int j = sign * part.index[std::size_t(c)] + offset;
+    if (j < 0 || j >= n) continue;
+    from[std::size_t(pairs)] = centreline[std::size_t(part.index[std::size_t(c)])];
+    to[std::size_t(pairs++)] = centreline[std::size_t(j)];
+  }
+  if (pairs < 3) return pairs;
+  *motion = fit_rigid(from.data(), to.data(), pairs);
+  double sq = 0;
+  for (int c = 0; c < pairs; ++c)
+    sq += (*motion * from[std::size_t(c)].cast<double>() - to[std::size_t(c)].cast<double>()).squaredNorm();
+  *rms_mm = std::sqrt(sq / pairs);
+  return pairs;
+}
+
+}  // namespace
+
 void judge_part_in_view(const std::vector<Eigen::Vector3f>& centreline, float step_mm, float d,
                         float slide_mm, const Pose& model_to_cam, const Intrinsics& k, Verification* v,
                         const PixelBox* view) {
   v->part_in_view_slides = false;
   const int n = int(centreline.size());
   if (n < 4 || !(step_mm > 0)) return;
-  // The centreline points in view (every stride-th of them where there are more than the buffers
-  // hold: a model's centreline has about 64).
-  const PixelBox seen = view_or_image(view, k.width, k.height);
-  const int stride = (n + kMaxPartPoints - 1) / kMaxPartPoints;
-  std::array<int, kMaxPartPoints> in;
-  int in_count = 0, in_view_count = 0;
-  double z_sum = 0;
-  for (int i = 0; i < n; ++i) {
-    const Eigen::Vector3d p = model_to_cam * centreline[std::size_t(i)].cast<double>();
-    const Eigen::Vector2d px = k.project(p);
-    if (!(p.z() > 0 && in_view(seen, px.x(), px.y()))) continue;
-    ++in_view_count, z_sum += p.z();
-    if (i % stride == 0) in[std::size_t(in_count++)] = i;
-  }
-  if (in_view_count == n || in_view_count < 3) return;
-  const double within_mm = std::max(double(kSlideCentrelineRmsOfD * d), z_sum / in_view_count / k.fx);
+  PartInView part;
+  centreline_in_view(centreline, model_to_cam, k, view, &part);
+  if (part.in_view == n || part.in_view < 3) return;
+  const double within_mm = std::max(double(kSlideCentrelineRmsOfD * d), part.mean_z_mm / k.fx);
   const int shift = std::max(1, int(std::lround(slide_mm / step_mm)));
-  std::array<Eigen::Vector3f, kMaxPartPoints> from, to;
   for (const int sign : {1, -1}) {
     // The rigid motion taking each point in view onto the point `shift` along, and how far it
     // leaves them.
-    int pairs = 0;
-    for (int c = 0; c < in_count; ++c) {
-      const int j = in[std::size_t(c)] + sign * shift;
-      if (j < 0 || j >= n) continue;
-      from[std::size_t(pairs)] = centreline[std::size_t(in[std::size_t(c)])];
-      to[std::size_t(pairs++)] = centreline[std::size_t(j)];
-    }
-    if (pairs < 3) continue;
-    const Pose m = fit_rigid(from.data(), to.data(), pairs);
-    double sq = 0;
-    for (int c = 0; c < pairs; ++c)
-      sq += (m * from[std::size_t(c)].cast<double>() - to[std::size_t(c)].cast<double>()).squaredNorm();
-    if (std::sqrt(sq / pairs) <= within_mm) {
+    Pose m;
+    double rms_mm = 0;
+    if (part_moved(centreline, part, 1, sign * shift, &m, &rms_mm) >= 3 && rms_mm <= within_mm) {
       v->part_in_view_slides = true;
       return;
     }
   }
+}
+
+int other_parts_in_view(const std::vector<Eigen::Vector3f>& centreline, float step_mm, float d,
+                        float least_shift_mm, float within_mm, const Pose& model_to_cam, const Intrinsics& k,
+                        const PixelBox* view, Pose* motions, int most) {
+  const int n = int(centreline.size());
+  if (n < 4 || !(step_mm > 0) || most < 1) return 0;
+  PartInView part;
+  centreline_in_view(centreline, model_to_cam, k, view, &part);
+  if (part.in_view == n || part.in_view < 3) return 0;
+  // Every placement of the part further along the centreline, or run backwards, that keeps all
+  // but a tenth of its points on it; the nearest fits first, each at least D (in steps) from the
+  // ones kept before it.
+  const int least_pairs = std::max(3, part.count - std::max(1, part.count / 10));
+  const int least_shift = std::max(1, int(std::lround(least_shift_mm / step_mm)));
+  const int apart = std::max(1, int(std::lround(d / step_mm)));
+  const int cap = std::min(most, kMaxOtherParts);
+  int kept = 0;
+  std::array<int, kMaxOtherParts> kept_sign{}, kept_offset{};
+  std::array<double, kMaxOtherParts> kept_rms{};
+  for (const int sign : {1, -1}) {
+    for (int offset = sign > 0 ? -(n - 1) : 0; offset <= (sign > 0 ? n - 1 : 2 * (n - 1)); ++offset) {
+      if (sign > 0 && std::abs(offset) < least_shift) continue;  // the part slid along itself
+      Pose m;
+      double rms_mm = 0;
+      if (part_moved(centreline, part, sign, offset, &m, &rms_mm) < least_pairs || !(rms_mm <= within_mm))
+        continue;
+      // Where it lies near one kept, the better of the two stays; where the list is full, it
+      // takes the worst one's place if better.
+      const auto keep = [&](int q) {
+        kept_sign[std::size_t(q)] = sign, kept_offset[std::size_t(q)] = offset;
+        kept_rms[std::size_t(q)] = rms_mm, motions[q] = m;
+      };
+      int near = -1;
+      for (int q = 0; q < kept && near < 0; ++q)
+        if (kept_sign[std::size_t(q)] == sign && std::abs(kept_offset[std::size_t(q)] - offset) < apart)
+          near = q;
+      if (near >= 0) {
+        if (rms_mm < kept_rms[std::size_t(near)]) keep(near);
+      } else if (kept < cap) {
+        keep(kept++);
+      } else {
+        int worst = 0;
+        for (int q = 1; q < kept; ++q)
+          if (kept_rms[std::size_t(q)] > kept_rms[std::size_t(worst)]) worst = q;
+        if (rms_mm < kept_rms[std::size_t(worst)]) keep(worst);
+      }
+    }
+  }
+  // The nearest fits first.
+  for (int q = 1; q < kept; ++q)
+    for (int r = q; r > 0 && kept_rms[std::size_t(r)] < kept_rms[std::size_t(r - 1)]; --r) {
+      std::swap(kept_rms[std::size_t(r)], kept_rms[std::size_t(r - 1)]);
+      std::swap(motions[r], motions[r - 1]);
+    }
+  return kept;
 }
 
 bool ends_tell_apart(const std::vector<Eigen::Vector3f>& centreline, float d, const Pose& a, const Pose& b) {

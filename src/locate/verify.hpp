@@ -134,6 +134,16 @@ void judge_ends(const std::vector<Eigen::Vector3f>& centreline, float d_mm, cons
 void judge_part_in_view(const std::vector<Eigen::Vector3f>& centreline, float step_mm, float d_mm,
                         float slide_mm, const Pose& model_to_cam, const Intrinsics& k, Verification* v,
                         const PixelBox* view);
+// Beyond the paper: the other parts of the pipe its part in view could be. The centreline's part
+// in view (as judge_part_in_view) moved, as a rigid motion, onto as many points elsewhere along it
+// (at least least_shift_mm further, or run backwards), all but a tenth of them landing on it,
+// within within_mm (RMS): an S's other bend where one bend is in view, a U's other leg. Writes at
+// most `most` such motions (model frame; the pose model_to_cam * motion.inverse() shows that other
+// part where this one is seen), the nearest fits first, a D apart along the centreline; returns
+// how many. None for a pose wholly in the view.
+int other_parts_in_view(const std::vector<Eigen::Vector3f>& centreline, float step_mm, float d_mm,
+                        float least_shift_mm, float within_mm, const Pose& model_to_cam, const Intrinsics& k,
+                        const PixelBox* view, Pose* motions, int most);
 // Whether judge_ends can tell two poses of one centreline (model frame, tube diameter d_mm) apart:
 // with their ends paired so that they lie closest, an end of one lies farther from the other's
 // than the first probe beyond an end reaches. Nearer, both poses' probes read beyond the same end
