@@ -89,6 +89,15 @@ float quality_margin(const Verification& best, const LocateConfig& cfg) {
 bool as_good(const Verification& rival, const Verification& best, const LocateConfig& cfg) {
   return hypothesis_quality(rival) >= hypothesis_quality(best) - quality_margin(best, cfg);
 }
+// ... and the same judged on the pixels the sensor read (at least verify_min_read_share of each
+// pose's counted): what lies where nothing is read speaks for neither (judge_other_parts).
+bool as_good_where_read(const Verification& rival, const Verification& best, const LocateConfig& cfg) {
+  const float min_read = float(cfg.verify_min_read_share);
+  const auto quality = [&](const Verification& v) {
+    return v.read_agreement(min_read) - kFreeSpaceWeight * v.free_space();
+  };
+  return quality(rival) >= quality(best) - quality_margin(best, cfg);
+}
 
 // How well the image shows a pose's ends where they are: an end pinned speaks for it, the tube
 // going on beyond an end (the pipe lies elsewhere along it) twice as much against.
@@ -1008,10 +1017,6 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
                                       std::max(lm.tube_d_mm, float(cfg.ambiguity_pose_mm)),
                                       kOtherPartRmsOfD * lm.tube_d_mm, found.model_to_cam, ctx.camera,
                                       &ctx.view, motions.data(), kMostOtherParts);
-    const float min_read = float(cfg.verify_min_read_share);
-    const auto read_quality = [&](const Verification& v) {
-      return v.read_agreement(min_read) - kFreeSpaceWeight * v.free_space();
-    };
     for (int q = 0; q < n && !out.other_part_unsure; ++q) {
       const Pose other = found.model_to_bin * motions[std::size_t(q)].inverse();
       bool known = pick_distance_mm(lm, other, found.model_to_bin, ambiguity_mm) <= ambiguity_mm;
@@ -1023,7 +1028,7 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
       const PipeEstimate e =
           refine_and_check(other, found.ridge_cost_mm, buf->region_pts.data(), refine_count, true);
       if (pick_distance_mm(lm, e.model_to_bin, found.model_to_bin, ambiguity_mm) <= ambiguity_mm) continue;
-      if (read_quality(e.check) < read_quality(found.check) - quality_margin(found.check, cfg)) continue;
+      if (!as_good_where_read(e.check, found.check, cfg)) continue;
       if (ends_shown(e.check) < ends_shown(found.check)) continue;  // its ends show it worse
       if (cfg.tell_rivals_apart) {
         const TellingPixels told = telling_pixels(found, e);
