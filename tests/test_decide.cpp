@@ -517,6 +517,15 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
        CandidateOutcome::not_confirmed, false, false, 0, true},
       {"rival clearly worse", judged_with_rival(seen(900, 0, 0), seen(840, 0, 0)), true,
        CandidateOutcome::accepted, false, true, 0.9f},
+      // Worse only by its part under a pipe in front (a Z's twin, its longer leg under a crossing
+      // pipe): as good where the sensor saw either, so ambiguous; worse there too, not.
+      {"rival worse only where a pipe lies in front of it", judged_with_rival(seen(900, 0, 0), seen(840, 0, 60)),
+       true, CandidateOutcome::accepted, true, false, 0.45f},
+      {"rival worse where nothing lies in front of it too", judged_with_rival(seen(900, 0, 0), seen(780, 0, 60)),
+       true, CandidateOutcome::accepted, false, true, 0.9f},
+      {"rival worse only where a pipe lies in front of it, the best's end pinned",
+       ends_read(judged_with_rival(seen(900, 0, 0), seen(840, 0, 60)), 1, 0, 0, 0), true,
+       CandidateOutcome::accepted, false, true, 0.9f},
       // ... but 0.06 worse on a pipe of 150 pixels is within two standard errors of the agreement.
       {"rival 0.06 worse on 150 pixels", judged_with_rival(seen_on(135, 150), seen_on(126, 150)), true,
        CandidateOutcome::accepted, true, false, 0.45f},
@@ -610,6 +619,10 @@ TEST(Decide, ThresholdsComeFromTheConfig) {
   EXPECT_FALSE(decide(told_apart, cfg).ambiguous);
   cfg.tell_rivals_apart = false;
   EXPECT_TRUE(decide(told_apart, cfg).ambiguous);
+  const Evidence rival_under_a_pipe = judged_with_rival(seen(900, 0, 0), seen(840, 0, 60));
+  EXPECT_TRUE(decide(rival_under_a_pipe, cfg).ambiguous);
+  cfg.rivals_judged_where_seen = false;  // off: its part under a pipe counts against it
+  EXPECT_FALSE(decide(rival_under_a_pipe, cfg).ambiguous);
   cfg.ambiguity_quality_margin = 0.01;
   EXPECT_FALSE(decide(judged_with_rival(seen(900, 0, 0), seen(860, 0, 0)), cfg).ambiguous);
   const Evidence half_read = seen_ending(ends_read(judged(unread(seen(450, 0, 0), 550)), 2, 0, 0, 0), 2);

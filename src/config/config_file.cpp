@@ -259,6 +259,7 @@ void read_locate(Section& s, LocateConfig* c) {
   s.real("roll_ambiguity_mm", &c->roll_ambiguity_mm, 0, 1000, "mm");
   s.boolean("tell_rolls_apart", &c->tell_rolls_apart);
   s.boolean("judge_other_parts", &c->judge_other_parts);
+  s.boolean("rivals_judged_where_seen", &c->rivals_judged_where_seen);
   s.boolean("twin_beyond_resolution_ambiguous", &c->twin_beyond_resolution_ambiguous);
   s.boolean("rivals_across_regions", &c->rivals_across_regions);
   s.boolean("judge_slides", &c->judge_slides);

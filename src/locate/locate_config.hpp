@@ -170,6 +170,9 @@ struct LocateConfig {
                                            // (kMinTellingPx pixels at telling_tolerance_mm) and at most a
                                            // quarter as much for the rival
                                            // (not for a pipe that slides along itself: its ends place it)
+  bool rivals_judged_where_seen = true;    // where no end of the best is pinned, a rival within the margin
+                                           // over the pixels read where nothing lies in front is as good
+                                           // (its part under a pipe says nothing)
   bool judge_rolls = true;        // the found pose turned about the pipe's own length by quarter turns
                                   // (eighths where a quarter turn lands it mostly on itself)
   double roll_ambiguity_mm = 5;   // ... a turn the image confirms as well that moves the pick further
@@ -250,6 +253,7 @@ inline void use_paper_search(LocateConfig* c) {
   c->ends_probed_past_itself = false;
   c->judge_rolls = false;
   c->judge_other_parts = false;
+  c->rivals_judged_where_seen = false;
   c->residual_rescue_of_rth = 1;
   c->short_region_min_extent_of_l = c->region_min_extent_of_l;
   c->leftover_regions = false;

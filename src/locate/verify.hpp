@@ -31,6 +31,11 @@ struct Verification {
     const float counted = std::max(float(model_px - unread_px), min_read_share * float(model_px));
     return counted > 0 ? float(agree_px) / counted : 0.f;
   }
+  // ... and over the pixels it read where nothing lies in front, at least min_share of the model's.
+  float seen_agreement(float min_share) const {
+    const float counted = std::max(float(model_px - unread_px - occluded_px), min_share * float(model_px));
+    return counted > 0 ? float(agree_px) / counted : 0.f;
+  }
   float free_space() const { return model_px ? float(free_space_px) / float(model_px) : 1.f; }
   // What the free-space check judges: a right pose a little to the side, or a sensor blending
   // fore- and background at the edge, sees through the model in the band; not inside it. A
