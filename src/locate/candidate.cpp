@@ -90,21 +90,14 @@ bool as_good(const Verification& rival, const Verification& best, const LocateCo
   return hypothesis_quality(rival) >= hypothesis_quality(best) - quality_margin(best, cfg);
 }
 // ... and the same judged on the pixels the sensor read (at least verify_min_read_share of each
-// pose's counted): what lies where nothing is read speaks for neither (judge_other_parts).
-bool as_good_where_read(const Verification& rival, const Verification& best, const LocateConfig& cfg) {
+// pose's counted): what lies where nothing is read speaks for neither (judge_other_parts). With
+// in_front_left_out, only those where nothing lies in front: a rival whose part lies under another
+// pipe is confirmed there no less than one stopping where that pipe begins (rivals_judged_where_seen).
+bool as_good_where_read(const Verification& rival, const Verification& best, const LocateConfig& cfg,
+                        bool in_front_left_out = false) {
   const float min_read = float(cfg.verify_min_read_share);
   const auto quality = [&](const Verification& v) {
-    return v.read_agreement(min_read) - kFreeSpaceWeight * v.free_space();
-  };
-  return quality(rival) >= quality(best) - quality_margin(best, cfg);
-}
-// ... and the same judged on the pixels the sensor read where nothing lies in front: a rival whose
-// part lies under another pipe is confirmed there no less than one stopping where that pipe begins
-// (rivals_judged_where_seen).
-bool as_good_where_seen(const Verification& rival, const Verification& best, const LocateConfig& cfg) {
-  const float min_seen = float(cfg.verify_min_read_share);
-  const auto quality = [&](const Verification& v) {
-    return v.seen_agreement(min_seen) - kFreeSpaceWeight * v.free_space();
+    return v.read_agreement(min_read, in_front_left_out) - kFreeSpaceWeight * v.free_space();
   };
   return quality(rival) >= quality(best) - quality_margin(best, cfg);
 }
@@ -356,9 +349,9 @@ Decision decide(const Evidence& given, const LocateConfig& cfg) {
   // crossing it, where the best stops, its other end out of the view: the best was handed out
   // 110 mm off while clearing (rivals_judged_where_seen; for every best, six bins of seed 19 took 40
   // pipes of 1978 fewer, with a wrong pick more: docs/experiments.md).
-  const bool rival_as_good =
-      as_good(e.second, e.best, cfg) ||
-      (cfg.rivals_judged_where_seen && e.best.ends_pinned == 0 && as_good_where_seen(e.second, e.best, cfg));
+  const bool rival_as_good = as_good(e.second, e.best, cfg) ||
+                             (cfg.rivals_judged_where_seen && e.best.ends_pinned == 0 &&
+                              as_good_where_read(e.second, e.best, cfg, /*in_front_left_out=*/true));
   out.ambiguous =
       e.have_second && rival_as_good && !(ends_tell && best_ends_shown > rival_ends_shown) && !told_apart;
   // Beyond the paper: a pipe that slides along itself is placed along its length only by an end

@@ -25,15 +25,12 @@ struct Verification {
   int unread_px = 0;      // no reading (a sensor's shadow, a specular hole): neither for nor against
   float agreement() const { return model_px ? float(agree_px) / float(model_px) : 0.f; }
   float unread() const { return model_px ? float(unread_px) / float(model_px) : 0.f; }
-  // The agreement over the pixels the sensor read, at least min_read_share of the model's
-  // counted (1: every pixel counts, as agreement()).
-  float read_agreement(float min_read_share) const {
-    const float counted = std::max(float(model_px - unread_px), min_read_share * float(model_px));
-    return counted > 0 ? float(agree_px) / counted : 0.f;
-  }
-  // ... and over the pixels it read where nothing lies in front, at least min_share of the model's.
-  float seen_agreement(float min_share) const {
-    const float counted = std::max(float(model_px - unread_px - occluded_px), min_share * float(model_px));
+  // The agreement over the pixels the sensor read (with in_front_left_out, only those where nothing
+  // lies in front), at least min_read_share of the model's counted (1: every pixel counts, as
+  // agreement()).
+  float read_agreement(float min_read_share, bool in_front_left_out = false) const {
+    const int left_out = unread_px + (in_front_left_out ? occluded_px : 0);
+    const float counted = std::max(float(model_px - left_out), min_read_share * float(model_px));
     return counted > 0 ? float(agree_px) / counted : 0.f;
   }
   float free_space() const { return model_px ? float(free_space_px) / float(model_px) : 1.f; }
