@@ -223,8 +223,11 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
        0.81f},
       {"sides drop away", judged(with_sides(seen(900, 0, 0), 100, 29)), true, CandidateOutcome::accepted,
        false, true, 0.9f},
-      {"too few side pixels to judge", judged(with_sides(seen(900, 0, 0), kMinSidePx - 1, kMinSidePx - 1)),
-       true, CandidateOutcome::accepted, false, true, 0.9f},
+      // Few side pixels read: the level ones counted out of kMinSidePx.
+      {"few side pixels, few of them level", judged(with_sides(seen(900, 0, 0), kMinSidePx - 1, 6)), true,
+       CandidateOutcome::accepted, false, true, 0.9f},
+      {"few side pixels, nearly all level", judged(with_sides(seen(900, 0, 0), 14, 13)), true,
+       CandidateOutcome::not_confirmed, false, false, 0},
       {"resting on the floor", judged(below_floor(seen(900, 0, 0), 0.29f)), true, CandidateOutcome::accepted,
        false, true, 0.9f},
       {"accepted under another pipe", judged(seen(800, 0, 200)), true, CandidateOutcome::accepted, false,

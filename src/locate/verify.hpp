@@ -71,7 +71,7 @@ struct Verification {
 
 // A pose is under the floor when more than this share of its model lies more than this * D below
 // the lowest surface seen (a third of a tube sunk to its axis); a blob when its sides do not drop
-// away (judged on at least this many side pixels).
+// away (its level side pixels counted out of at least this many).
 constexpr float kMaxShareBelowFloor = 0.3f, kBelowFloorOfD = 0.25f;
 constexpr int kMinSidePx = 20;
 
