@@ -512,8 +512,8 @@ TEST(Segmentation, HeldGrowthKeepsRegionsOnTheirPipe) {
 // cells (here a ramp at one end; in the zoo, noise turning normals on its sides upward) joins the
 // floor's core, far too large to be a pipe. Its top stands clear above the plane that core lies
 // in and is taken off it as a core of its own, which grows into a candidate (before: none).
-// The candidate regions of a synthetic Z-buffer with the default config (normals over a 5 mm
-// window), for a pipe of diameter d and extent l.
+// The candidate regions of a synthetic Z-buffer with the default config or `cfg` (normals over a
+// 5 mm window), for a pipe of diameter d and extent l.
 RegionStats default_regions(const ZBuffer& zb, double d, double l, RegionBuffers* rb,
                             const LocateConfig& cfg = LocateConfig()) {
   NormalMap nm;
@@ -549,8 +549,8 @@ TEST(Segmentation, AThinTubeJoinedToTheFloorGetsACoreOfItsOwn) {
 // A pipe's top cut by holes into pieces a diameter long (glints, a sensor's dropouts): each
 // piece's upward strip, 0.7 D wide, covers about 0.6 D^2. Under the default core area (0.75 D^2)
 // no piece is a core and the pipe gets no candidate; with core_min_area_of_d2 = 0.5 the pieces
-// are cores, joined across the holes into candidates on the pipe (the key's use for thin tubes;
-// measured on the zoo and not made the default: docs/experiments.md).
+// are cores, joined across the holes into candidates on the pipe (the key's use where crossings
+// and dropouts cut tops short; measured on the zoo, not made the default: docs/experiments.md).
 TEST(Segmentation, ATopCutIntoPiecesADiameterLongIsFoundWithSmallerCores) {
   constexpr double d = 20, r = d / 2, length = 160, axis_y = 100, x0 = 30, piece = d, hole = 0.6 * d;
   const auto tube_top = [&](double y) {
