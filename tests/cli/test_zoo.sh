@@ -35,6 +35,22 @@ for r in z["rows"]:
 PY
 grep -qE ' seen +clear ' "$work/zoo.txt" || fail "no seen/clear columns: $(head -12 "$work/zoo.txt")"
 grep -q '^clearing: ' "$work/zoo.txt" || fail "no clearing line: $(tail -8 "$work/zoo.txt")"
+# --first-bin: bin 2 alone is the second bin of the run above (the same pile on its first frame,
+# its truth in clear-truth-2.jsonl); bin 1's truth is not written again.
+head -1 "$work/zoo/shapes/20-3D/clear-truth-2.jsonl" > "$work/bin2-first.jsonl"
+head -1 "$work/zoo/shapes/20-3D/clear-truth.jsonl" | cmp -s - "$work/bin2-first.jsonl" &&
+  fail "--bins 2: the second bin holds the first bin's pile"
+touch -d '2000-01-01' "$work/zoo/shapes/20-3D/clear-truth.jsonl"
+"$here/tools/zoo" --bin "$bin" --out "$work/zoo" --shapes 20 --images 2 --reuse --first-bin 2 \
+  > "$work/zoo8.txt" 2>&1 || fail "--first-bin 2 failed: $(tail -20 "$work/zoo8.txt")"
+head -1 "$work/zoo/shapes/20-3D/clear-truth-2.jsonl" | cmp -s - "$work/bin2-first.jsonl" ||
+  fail "--first-bin 2: not the pile of the second bin"
+[ "$(find "$work/zoo/shapes/20-3D/clear-truth.jsonl" -newer "$work/bin2-first.jsonl")" = "" ] ||
+  fail "--first-bin 2: bin 1 cleared too"
+if "$here/tools/zoo" --bin "$bin" --out "$work/zoo" --first-bin 0 > "$work/zoo9.txt" 2>&1; then
+  fail "--first-bin 0 accepted"
+fi
+grep -q -- '--first-bin 0' "$work/zoo9.txt" || fail "--first-bin 0: no message naming it: $(cat "$work/zoo9.txt")"
 # The camera mounted to see the whole bin while clearing: passed to the sim source.
 "$here/tools/zoo" --bin "$bin" --out "$work/zoo" --shapes 20 --images 2 --reuse --clear-camera bin \
   > "$work/zoo6.txt" 2>&1 || fail "--clear-camera bin failed: $(tail -20 "$work/zoo6.txt")"
