@@ -172,8 +172,7 @@ constexpr Check kChecks[] = {
     // real SR300 frame without pipes, handed out before: docs/experiments.md).
     {CandidateStage::hypotheses, CandidateOutcome::not_confirmed,
      [](const Evidence& e, const LocateConfig& cfg) {
-       const float level = float(e.best.side_level_px) / float(std::max(e.best.side_px, kMinSidePx));
-       return !(level > float(cfg.verify_max_side_level));
+       return !(e.best.side_level(kMinSidePx) > float(cfg.verify_max_side_level));
      }},
     // ... and no pipe lies under the floor.
     {CandidateStage::hypotheses, CandidateOutcome::not_confirmed,

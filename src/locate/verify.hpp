@@ -45,7 +45,10 @@ struct Verification {
   // floor); the surface of a smooth blob goes on at the silhouette's depth.
   int side_px = 0;        // pixels a few steps outside the silhouette with a reading not in front
   int side_level_px = 0;  // ... whose depth lies within the drop of the silhouette's
-  float side_level() const { return side_px ? float(side_level_px) / float(side_px) : 0.f; }
+  // The level share, counted out of at least `out_of` side pixels (a few read say little).
+  float side_level(int out_of = 1) const {
+    return float(side_level_px) / float(std::max(side_px, std::max(out_of, 1)));
+  }
   float below_floor = 0;  // share of the model more than kBelowFloorOfD * D under the lowest surface seen
   float outside_view = 0;  // share of the model's vertices outside the image: seen nowhere
   // A square of the silhouette, hole_side_px wide, that the sensor saw through entirely: the pipe
