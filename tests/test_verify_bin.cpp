@@ -325,6 +325,46 @@ TEST(BinAwareVerification, EndsTellPosesApartOnlyWhereTheyLieBeyondTheFirstProbe
   EXPECT_FALSE(ends_tell_apart(line, d, truth, turned));
 }
 
+// A raised end casts the sensor's shadow on the floor beyond it. Where the first probe beyond the
+// tip (0.75 D) falls in it and the second (1.25 D) reads the floor, the end is pinned but not seen
+// ending outright; a pose slid a quarter of D past the end, over the shadow, reads both its probes
+// on the floor and shows that end ending outright. judge_ends() counts the true end apart, as seen
+// ending but for the shadow (place_slides_finely moves a pose back to it: an arc was handed out
+// 19 mm past its end so, 14-arc of a held-out zoo, tools/zoo --seed 20).
+TEST(BinAwareVerification, AnEndBesideTheSensorsShadowIsSeenEndingButForIt) {
+  TubeOnFloor tube;
+  const Intrinsics& k = tube.s.camera.intrinsics;
+  const Pose& w2c = *tube.s.camera.world_to_cam;
+  const std::vector<Eigen::Vector3f>& line = tube.lm.centreline_points;
+  // The shadow: nothing read from 0.5 to 1.0 D beyond the tip at the tube's end at x = 75 mm (the
+  // centreline's last point, a little inside the tube's end cap), across the tube's line.
+  const double tip_x = -75 + double(std::max(line.front().x(), line.back().x()));
+  for (int v = 0; v < k.height; ++v)
+    for (int u = 0; u < k.width; ++u) {
+      const Eigen::Vector3d floor =
+          w2c.inverse() * Eigen::Vector3d((u - k.cx) / k.fx * kCameraHeightMm,
+                                          (v - k.cy) / k.fy * kCameraHeightMm, kCameraHeightMm);
+      if (floor.x() > tip_x + 0.5 * kTubeMm && floor.x() < tip_x + 1.0 * kTubeMm &&
+          std::abs(floor.y()) < kTubeMm)
+        tube.s.depth.at(u, v) = 0;
+    }
+  const auto ends = [&](double x_mm) {
+    Pose m2w = Pose::Identity();
+    m2w.translation() = Eigen::Vector3d(x_mm, 0, kTubeMm / 2);
+    Verification v;
+    judge_ends(line, float(kTubeMm), w2c * m2w, tube.s.depth, k, 7.0f, &v);
+    return v;
+  };
+  const Verification truth = ends(-75);
+  EXPECT_EQ(truth.ends_pinned, 2);
+  EXPECT_EQ(truth.ends_seen_ending, 1);  // the end without a shadow
+  EXPECT_EQ(truth.ends_ending_past_shadow, 1);
+  const Verification slid = ends(-75 + 0.25 * kTubeMm);
+  EXPECT_EQ(slid.ends_pinned, 2);
+  EXPECT_EQ(slid.ends_seen_ending, 2);  // both probes past the slid end read the floor
+  EXPECT_EQ(slid.ends_ending_past_shadow, 0);
+}
+
 // An end whose tip lies outside the sensor's view (beyond the image, or in the band an active
 // sensor does not read) is counted as such: no image can show it ending (decide() does not ask
 // for it where both ends lie there), and what lies beyond it neither pins it nor shows it going on

@@ -970,7 +970,11 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
   // the image confirms the moved pose about as well (as_good): the pixel count can grow as a pose
   // slides more of itself into the view while a smaller share of it agrees (an arc 3 mm from its
   // pipe, agreeing 0.93, its end pinned under a pipe across, was moved 25 mm round itself to 0.88
-  // and handed out while clearing 14-arc of seed 20).
+  // and handed out while clearing 14-arc of seed 20). An end the moved pose shows ending but for
+  // the sensor's shadow (its first probe unread, the second lower) counts as seen ending here: an
+  // arc slid 19 mm past its end, over the stereo shadow the end casts on a pipe below it, read
+  // both probes on that pipe and was kept there, a pick that took nothing (14-arc of seed 20, with
+  // cores from 0.5 D^2). The moved pose's end stays pinned only, for all that follows.
   if (cfg.place_slides_finely && have_best && !lm.fine_slides.empty() && placed_by_ends(best.check) &&
       image_accepts(best.check, cfg) && !deadline.passed()) {
     const Pose found = best.model_to_bin;
@@ -987,7 +991,8 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
       PipeEstimate slid = slid_best(found, *best_slide, best_slide_check);
       read_ends_and_floor(&slid);
       if (turn_may_replace(slid.check, best.check) &&
-          slid.check.ends_seen_ending >= best.check.ends_seen_ending && as_good(slid.check, best.check, cfg))
+          slid.check.ends_seen_ending + slid.check.ends_ending_past_shadow >= best.check.ends_seen_ending &&
+          as_good(slid.check, best.check, cfg))
         moved_best_to(slid);
     }
     buf->times.verify_ms += ms_since(t0);

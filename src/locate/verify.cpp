@@ -181,6 +181,7 @@ void judge_ends(const std::vector<Eigen::Vector3f>& centreline, float d, const P
                 const Image<float>& depth, const Intrinsics& k, float tol, Verification* v,
                 const EndReading& how, const PixelBox* view) {
   v->ends_pinned = v->ends_continued = v->ends_seen_ending = v->ends_pinned_further = v->ends_out_of_view = 0;
+  v->ends_ending_past_shadow = 0;
   const PixelBox seen = view_or_image(view, depth.width, depth.height);
   const int n = int(centreline.size());
   if (n < 2) return;
@@ -261,6 +262,7 @@ void judge_ends(const std::vector<Eigen::Vector3f>& centreline, float d, const P
       shift += kProbeShiftOfD;
     const bool only_itself = shift > kMostProbeShiftOfD;
     int free = 0, going_on = 0, probes = 0;
+    bool first_unread = false;  // the first probe beyond the tip read nothing
     const auto read = [&](float zo, float facing_z) {
       if (!(zo > 0) || zo < facing_z - tol) return;  // no reading, or something in front
       ++probes;
@@ -271,6 +273,7 @@ void judge_ends(const std::vector<Eigen::Vector3f>& centreline, float d, const P
       if (only_itself) break;
       float facing_z = 0;
       const float zo = probe(beyond + shift, &facing_z);
+      first_unread = first_unread || (beyond == kEndProbesOfD[0] && !(zo > 0));
       read(zo, facing_z);
     }
     // Beyond the paper: a pipe that slides along itself is placed by its ends alone. Where both
@@ -298,6 +301,7 @@ void judge_ends(const std::vector<Eigen::Vector3f>& centreline, float d, const P
     v->ends_pinned += pinned;
     v->ends_seen_ending += pinned && !tip_hidden && probes == int(std::size(kEndProbesOfD)) && !further_only;
     v->ends_pinned_further += pinned && further_only;
+    v->ends_ending_past_shadow += pinned && !tip_hidden && first_unread && probes == 1 && !further_only;
     v->ends_continued += going_on == probes;
   }
 }

@@ -62,6 +62,11 @@ struct Verification {
   // ... of the pinned ends, those seen ending outright: the tip shown and every probe beyond it
   // read, lower (with tip_must_show every pinned end whose probes all read).
   int ends_seen_ending = 0;
+  // ... and those seen ending but for the sensor's shadow: the tip shown, the first probe beyond it
+  // reading nothing and the second lower. A raised end casts the sensor's shadow on what lies
+  // beyond it; the first probe (0.75 D past the tip) can fall in it, while a pose slid past the
+  // end, over the shadow, reads both probes lower (place_slides_finely counts these ends).
+  int ends_ending_past_shadow = 0;
   // ... and those pinned by the probe read further along the bend alone (EndReading::read_further):
   // nothing was read between the tip and it, where the tube may go on.
   int ends_pinned_further = 0;
