@@ -339,7 +339,8 @@ TEST(Locator, ABinOfLongArcsIsClearedByTheirEndsWithoutAWrongPick) {
   sim.pipes = 30, sim.seed = 2001013, sim.tilt_deg = 24.8, sim.sensor = "stereo";
   sim.camera_height_min_mm = 984, sim.camera_height_max_mm = 1084;
   sim.refill = false;
-  EXPECT_GE(taken_before_the_bin_stops(pipe_of("B93.3r507.3", 27.8, "long arc"), sim, 12), 7);  // measured: 7
+  EXPECT_GE(taken_before_the_bin_stops(pipe_of("B93.3r507.3", 27.8, "long arc"), sim, 12),
+            7);  // measured: 12, every cycle asked
 }
 
 // Another bin of those arcs, its pipes' cores read from 0.5 D^2 (core_min_area_of_d2, which
