@@ -336,8 +336,8 @@ TEST(BinAwareVerification, AnEndBesideTheSensorsShadowIsSeenEndingButForIt) {
   const Intrinsics& k = tube.s.camera.intrinsics;
   const Pose& w2c = *tube.s.camera.world_to_cam;
   const std::vector<Eigen::Vector3f>& line = tube.lm.centreline_points;
-  // The shadow: nothing read from 0.5 to 1.0 D beyond the tip at the tube's end at x = 75 mm (the
-  // centreline's last point, a little inside the tube's end cap), across the tube's line.
+  // The shadow: nothing read from 0.5 to 1.0 D beyond the tip (the centreline's last point, 7 mm
+  // inside the tube's end at x = 75 mm), across the tube's line.
   const double tip_x = -75 + double(std::max(line.front().x(), line.back().x()));
   for (int v = 0; v < k.height; ++v)
     for (int u = 0; u < k.width; ++u) {
