@@ -512,10 +512,10 @@ TEST(Segmentation, HeldGrowthKeepsRegionsOnTheirPipe) {
 // cells (here a ramp at one end; in the zoo, noise turning normals on its sides upward) joins the
 // floor's core, far too large to be a pipe. Its top stands clear above the plane that core lies
 // in and is taken off it as a core of its own, which grows into a candidate (before: none).
-// The candidate regions of a synthetic Z-buffer with the default config or `cfg` (normals over a
-// 5 mm window), for a pipe of diameter d and extent l.
-RegionStats default_regions(const ZBuffer& zb, double d, double l, RegionBuffers* rb,
-                            const LocateConfig& cfg = LocateConfig()) {
+// The candidate regions of a synthetic Z-buffer with `cfg` (the default config unless given;
+// normals over a 5 mm window), for a pipe of diameter d and extent l.
+RegionStats regions_of(const ZBuffer& zb, double d, double l, RegionBuffers* rb,
+                       const LocateConfig& cfg = LocateConfig()) {
   NormalMap nm;
   reserve_normals(&nm, zb);
   compute_normals(zb, 5, 10, &nm);
@@ -536,7 +536,7 @@ TEST(Segmentation, AThinTubeJoinedToTheFloorGetsACoreOfItsOwn) {
     return 0.0f;
   });
   RegionBuffers rb;
-  const RegionStats stats = default_regions(zb, d, length, &rb);
+  const RegionStats stats = regions_of(zb, d, length, &rb);
   EXPECT_EQ(stats.raised_cores, 1);
   ASSERT_EQ(stats.candidates, 1);
   const CandidateRegion& c = rb.candidates[0];
@@ -570,13 +570,13 @@ TEST(Segmentation, ATopCutIntoPiecesADiameterLongIsFoundWithSmallerCores) {
     return n;
   };
   RegionBuffers rb;
-  const RegionStats stats = default_regions(zb, d, length, &rb);
+  const RegionStats stats = regions_of(zb, d, length, &rb);
   EXPECT_EQ(stats.cores_kept, 0);
   EXPECT_EQ(on_the_pipe(rb), 0);
   LocateConfig small_cores;
   small_cores.core_min_area_of_d2 = 0.5;
   RegionBuffers rb_small;
-  const RegionStats small = default_regions(zb, d, length, &rb_small, small_cores);
+  const RegionStats small = regions_of(zb, d, length, &rb_small, small_cores);
   EXPECT_GE(small.joined, 1);
   EXPECT_GE(on_the_pipe(rb_small), 1);
 }
@@ -594,7 +594,7 @@ TEST(Segmentation, AThinPipeWhoseRegionLeaksOntoTheFloorIsGrownToItsEquator) {
     return float(floor_z);
   });
   RegionBuffers rb;
-  const RegionStats stats = default_regions(zb, d, 2 * ring + d, &rb);
+  const RegionStats stats = regions_of(zb, d, 2 * ring + d, &rb);
   EXPECT_EQ(stats.leaked, 0);
   EXPECT_EQ(stats.regrown_after_leak, 1);
   ASSERT_EQ(stats.candidates, 1);

@@ -273,7 +273,7 @@ void judge_ends(const std::vector<Eigen::Vector3f>& centreline, float d, const P
       if (only_itself) break;
       float facing_z = 0;
       const float zo = probe(beyond + shift, &facing_z);
-      first_unread = first_unread || (beyond == kEndProbesOfD[0] && !(zo > 0));
+      if (beyond == kEndProbesOfD[0]) first_unread = !(zo > 0);
       read(zo, facing_z);
     }
     // Beyond the paper: a pipe that slides along itself is placed by its ends alone. Where both
@@ -299,9 +299,12 @@ void judge_ends(const std::vector<Eigen::Vector3f>& centreline, float d, const P
     }
     const bool pinned = free == probes && !(how.tip_must_show && tip_hidden);
     v->ends_pinned += pinned;
-    v->ends_seen_ending += pinned && !tip_hidden && probes == int(std::size(kEndProbesOfD)) && !further_only;
+    // Pinned with its tip shown by the probes beyond it: seen ending where every one of them
+    // read, seen ending but for the shadow where only the first read nothing.
+    const bool shown_ending = pinned && !tip_hidden && !further_only;
+    v->ends_seen_ending += shown_ending && probes == int(std::size(kEndProbesOfD));
+    v->ends_ending_past_shadow += shown_ending && first_unread && probes == 1;
     v->ends_pinned_further += pinned && further_only;
-    v->ends_ending_past_shadow += pinned && !tip_hidden && first_unread && probes == 1 && !further_only;
     v->ends_continued += going_on == probes;
   }
 }
