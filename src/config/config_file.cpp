@@ -236,6 +236,7 @@ void read_locate(Section& s, LocateConfig* c) {
   s.real("refine_inlier_mm", &c->refine_inlier_mm, 0, 50, "mm (0: derived)");
   s.integer("refine_max_points", &c->refine_max_points, 50, 100000, "points");
   s.boolean("refine_on_explained", &c->refine_on_explained);
+  s.boolean("twins_refined_on_region", &c->twins_refined_on_region);
   s.boolean("polish_best", &c->polish_best);
   s.boolean("refine_facing_only", &c->refine_facing_only);
   s.boolean("refine_ray_pairs", &c->refine_ray_pairs);

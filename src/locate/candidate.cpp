@@ -840,7 +840,13 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
   // where the image judges that better than its refinement: refined on the points the best
   // explains, a 10.2 mm elbow's twin agreeing 0.89 was moved off its pipe to 0.52 (the zoo's
   // 04-elbow; docs/experiments.md). Not for other pipes: a near twin kept unrefined is handed out
-  // in its pipe's place (23-planar of seed 21: 2 wrong picks).
+  // in its pipe's place (23-planar of seed 21: 2 wrong picks). A twin of a pipe that does not
+  // slide is refined on the region as well (twins_refined_on_region), each refinement judged as a
+  // hypothesis: what the best explains is where the best put the pipe, and a twin refined only
+  // there can stay short of its own place. A 57 mm S of 9.4 mm tube, 61 mm off, was the pick: its
+  // twin refined on what it explained agreed 0.93 and saw through 0.07, on the region 0.96 and
+  // 0.04, as well as the pose, which is now ambiguous (11-S-asym of seed 21; twelve bins of every
+  // shape: docs/experiments.md).
   constexpr int kTwinRounds = 4;
   const Start twin_start = lm.slides.empty() ? Start::hypothesis : Start::twin_may_stay;
   for (int round = 0; have_best && round < kTwinRounds && !ctx.model.near_symmetries.empty(); ++round) {
@@ -856,6 +862,10 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
       if (deadline.passed()) return out;
       judge(twin, found_cost_mm, found_count > 0 ? buf->found_pts.data() : buf->region_pts.data(),
             found_count > 0 ? found_count : refine_count, twin_start);
+      if (cfg.twins_refined_on_region && found_count > 0 && lm.slides.empty()) {
+        if (deadline.passed()) return out;
+        judge(twin, found_cost_mm, buf->region_pts.data(), refine_count, twin_start);
+      }
     }
     if (pick_distance_mm(lm, found, best.model_to_bin, ambiguity_mm) <= ambiguity_mm) break;  // it held
   }

@@ -122,6 +122,8 @@ struct LocateConfig {
   int refine_max_points = 1500;            // observed points used by the refinement
   bool refine_on_explained = true;  // then again on every pixel the refined pose explains (the
                                     // whole pipe seen, not only its region's top strip), if better
+  bool twins_refined_on_region = true;  // a near twin of a pipe that does not slide is refined on its
+                                        // region too, not only on every pixel the best explains
   bool polish_best = true;          // the best reading refined once more on every pixel it explains, kept
                                     // where the image confirms it and shows its ends as well and it
                                     // stays the same reading (not for a pipe that slides along itself)
