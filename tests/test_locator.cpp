@@ -920,5 +920,26 @@ TEST(LocateOutput, APoseSeenEndingOutrightIsHandedOutBeforeOneThatIsNot) {
   EXPECT_EQ(out.pick(), -1);
 }
 
+// ... and a pose pinned at both ends, though neither is seen ending outright, is placed by its
+// ends as well as one seen ending: handed out in rank order with it. One pinned end is not enough.
+TEST(LocateOutput, APosePinnedAtBothEndsIsHandedOutAsOneSeenEnding) {
+  const auto estimate = [](int pinned, int seen_ending) {
+    PipeEstimate e;
+    e.pickable = true;
+    e.check.ends_pinned = pinned;
+    e.check.ends_seen_ending = seen_ending;
+    return e;
+  };
+  LocateOutput out;
+  out.estimates = {estimate(2, 0), estimate(1, 1)};
+  EXPECT_EQ(out.pick(), 0);  // the better ranked: both placed by their ends
+  EXPECT_EQ(LocateOutput::hand_out_order(out.estimates[0]), 0);
+  out.estimates = {estimate(1, 0), estimate(2, 0)};
+  EXPECT_EQ(out.pick(), 1);  // one end pinned only: after the pose pinned at both
+  EXPECT_EQ(LocateOutput::hand_out_order(out.estimates[0]), 1);
+  out.estimates = {estimate(1, 0), estimate(0, 0)};
+  EXPECT_EQ(out.pick(), 0);  // neither placed: rank order
+}
+
 }  // namespace
 }  // namespace pipeloc
