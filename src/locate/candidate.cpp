@@ -27,24 +27,24 @@ constexpr float kExplainedMinAgreementShare = 0.8f;
 // Beyond the paper: the observed points a verified pose explains (its rendered silhouette, depth
 // within the tolerance), in the bin frame, evenly thinned to the buffer's capacity: the whole
 // pipe the image shows, where the region held only its top strip. `rendered` holds the depths
-// verify_pose() drew in v.box, and `drawn` the columns that render kept. Returns how many.
+// render_depth_in_box() drew in `box`, and `drawn` the columns that render kept. Returns how many.
 int explained_points(const CandidateContext& ctx, const Image<float>& rendered, const ProjectedMesh& drawn,
-                     const Verification& v, float tol, std::vector<Eigen::Vector3f>* out) {
+                     const PixelBox& box, float tol, std::vector<Eigen::Vector3f>* out) {
   const auto explained = [&](int x, int y) {
     const float zm = rendered.at(x, y), zo = ctx.depth.at(x, y);
     return zm > 0 && zo > 0 && std::abs(zo - zm) <= tol;
   };
   int count = 0;
-  for (int y = v.box.y0; y <= v.box.y1; ++y) {
-    const auto [from, to] = drawn.drawn_columns(v.box, y, rendered.height);
+  for (int y = box.y0; y <= box.y1; ++y) {
+    const auto [from, to] = drawn.drawn_columns(box, y, rendered.height);
     for (int x = from; x <= to; ++x) count += explained(x, y);
   }
   const int capacity = int(out->size());
   const int stride = count / std::max(1, capacity) + 1;
   const Pose cam_to_bin = ctx.bin_to_cam.inverse();
   int seen = 0, n = 0;
-  for (int y = v.box.y0; y <= v.box.y1; ++y) {
-    const auto [from, to] = drawn.drawn_columns(v.box, y, rendered.height);
+  for (int y = box.y0; y <= box.y1; ++y) {
+    const auto [from, to] = drawn.drawn_columns(box, y, rendered.height);
     for (int x = from; x <= to; ++x) {
       if (!explained(x, y) || seen++ % stride != 0 || n >= capacity) continue;
       (*out)[std::size_t(n++)] = (cam_to_bin * ctx.camera.unproject(x, y, ctx.depth.at(x, y))).cast<float>();
@@ -667,17 +667,26 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
   const float ambiguity_mm = float(cfg.ambiguity_pose_mm);
   PipeEstimate &best = out.best, &second = out.second;
   bool &have_best = out.have_best, &have_second = out.have_second;
+  // The pose whose render the scratch buffers hold (verify_at's last): the points the best
+  // explains are read from it where it is the best's, not drawn again (the same depths).
+  Pose scratch_pose = Pose::Identity();
+  PixelBox scratch_box;  // ... and the box it was drawn in
+  bool scratch_holds_pose = false;
   // The image's judgement of a pose (model to camera); renders into the scratch buffers.
   const auto verify_at = [&](const Pose& model_to_cam) {
-    return verify_pose(lm.verify_mesh, lm.verify_winding, model_to_cam, ctx.depth, ctx.camera,
-                       float(cfg.verify_tolerance_mm), float(cfg.side_drop_of_d) * lm.tube_d_mm,
-                       free_space_band_px(cfg, lm, ctx.camera, model_to_cam), &buf->scratch_depth,
-                       &buf->scratch_mesh, hole_side_px(lm, ctx.camera, model_to_cam), &ctx.view);
+    const Verification v =
+        verify_pose(lm.verify_mesh, lm.verify_winding, model_to_cam, ctx.depth, ctx.camera,
+                    float(cfg.verify_tolerance_mm), float(cfg.side_drop_of_d) * lm.tube_d_mm,
+                    free_space_band_px(cfg, lm, ctx.camera, model_to_cam), &buf->scratch_depth,
+                    &buf->scratch_mesh, hole_side_px(lm, ctx.camera, model_to_cam), &ctx.view);
+    scratch_pose = model_to_cam, scratch_box = v.box, scratch_holds_pose = true;
+    return v;
   };
   // Where the renders of two poses differ, the pixels that show each (tell_apart); renders into
   // the scratch and rival buffers.
   const auto telling_pixels = [&](const PipeEstimate& a, const PipeEstimate& b) {
     const auto t0 = Clock::now();
+    scratch_holds_pose = false;
     const PixelBox box_a = render_depth_in_box(lm.verify_mesh, a.model_to_cam, ctx.camera,
                                                &buf->scratch_depth, &buf->scratch_mesh, lm.verify_winding);
     const PixelBox box_b = render_depth_in_box(lm.verify_mesh, b.model_to_cam, ctx.camera, &buf->rival_depth,
@@ -746,7 +755,7 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
     // (the region holds only its top strip, along which a leg can slide); kept if judged better.
     if (cfg.refine_on_explained &&
         e.check.agreement() >= kExplainedMinAgreementShare * float(cfg.verify_min_agreement)) {
-      const int n = explained_points(ctx, buf->scratch_depth, buf->scratch_mesh, e.check,
+      const int n = explained_points(ctx, buf->scratch_depth, buf->scratch_mesh, e.check.box,
                                      float(cfg.verify_tolerance_mm), &buf->explained_pts);
       if (n >= kMinExplainedPoints) {
         buf->times.verify_ms += ms_since(t0);
@@ -821,10 +830,15 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
     judge(fits[i].pose, fits[i].cost_mm, buf->region_pts.data(), refine_count);
   }
   // The points the best explains, in buf->found_pts, if enough to refine on (else 0).
+  // Only the best's render is read: drawn where the scratch holds another's, not judged again.
   const auto explained_by_best = [&] {
     const auto t0 = Clock::now();
-    const Verification v = verify_at(best.model_to_cam);
-    const int n = explained_points(ctx, buf->scratch_depth, buf->scratch_mesh, v,
+    if (!scratch_holds_pose || !(scratch_pose.matrix() == best.model_to_cam.matrix())) {
+      scratch_box = render_depth_in_box(lm.verify_mesh, best.model_to_cam, ctx.camera, &buf->scratch_depth,
+                                        &buf->scratch_mesh, lm.verify_winding);
+      scratch_pose = best.model_to_cam, scratch_holds_pose = true;
+    }
+    const int n = explained_points(ctx, buf->scratch_depth, buf->scratch_mesh, scratch_box,
                                    float(cfg.verify_tolerance_mm), &buf->found_pts);
     buf->times.verify_ms += ms_since(t0);
     return n < kMinExplainedPoints ? 0 : n;

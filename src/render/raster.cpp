@@ -17,10 +17,41 @@ constexpr double kRowEdgeMinRise = 1e-6;
 // more than it saves.
 constexpr int kSpanMinWidthPx = 8;
 
+// The least and greatest of three (the first of equals, as std::min / std::max of a list, without
+// the list's loop: the bounds are worked out for every face drawn).
+double least_of(double a, double b, double c) {
+  const double ab = b < a ? b : a;
+  return c < ab ? c : ab;
+}
+double greatest_of(double a, double b, double c) {
+  const double ab = a < b ? b : a;
+  return ab < c ? c : ab;
+}
+// int(std::ceil(v)) and int(std::floor(v)) for v within int's range, from the truncation alone.
+int ceil_to_int(double v) {
+  const int t = int(v);
+  return double(t) < v ? t + 1 : t;
+}
+int floor_to_int(double v) {
+  const int t = int(v);
+  return double(t) > v ? t - 1 : t;
+}
+
 // A scan's rows not wanted (on_row below).
 struct NoRows {
   void operator()(int, int, int) const {}
 };
+
+// The rows of pixel centres a screen triangle's box spans in an image `height` rows high (none
+// where y0 > y1).
+struct ScanRows {
+  int y0, y1;
+};
+ScanRows scan_rows(const Eigen::Vector2d& s0, const Eigen::Vector2d& s1, const Eigen::Vector2d& s2,
+                   int height) {
+  return {std::max(0, ceil_to_int(least_of(s0.y(), s1.y(), s2.y()))),
+          std::min(height - 1, floor_to_int(greatest_of(s0.y(), s1.y(), s2.y())))};
+}
 
 // Visits the integer pixel centres inside the screen triangle s0 s1 s2 (either winding).
 // A wide triangle's rows are scanned only over the span where the three edges' tests can hold (a
@@ -28,16 +59,16 @@ struct NoRows {
 // box); the span is widened by a pixel each way, and every pixel in it takes the exact test, so
 // the pixels visited are those of the test over the box. on_row(y, first, last) is told, once per
 // row scanned, the columns scanned there (every pixel visited in the row lies among them).
+// `rows`: scan_rows() of the triangle.
 template <typename Visit, typename OnRow = NoRows>
 void scan_triangle(const Eigen::Vector2d& s0, const Eigen::Vector2d& s1, const Eigen::Vector2d& s2, int width,
-                   int height, Visit visit, OnRow on_row = {}) {
+                   const ScanRows& rows, Visit visit, OnRow on_row = {}) {
   const double area = edge(s0, s1, s2.x(), s2.y());
   if (std::abs(area) < 1e-12) return;
   const double sign = area > 0 ? 1.0 : -1.0;
-  const int x0 = std::max(0, int(std::ceil(std::min({s0.x(), s1.x(), s2.x()}))));
-  const int x1 = std::min(width - 1, int(std::floor(std::max({s0.x(), s1.x(), s2.x()}))));
-  const int y0 = std::max(0, int(std::ceil(std::min({s0.y(), s1.y(), s2.y()}))));
-  const int y1 = std::min(height - 1, int(std::floor(std::max({s0.y(), s1.y(), s2.y()}))));
+  const int x0 = std::max(0, ceil_to_int(least_of(s0.x(), s1.x(), s2.x())));
+  const int x1 = std::min(width - 1, floor_to_int(greatest_of(s0.x(), s1.x(), s2.x())));
+  const int y0 = rows.y0, y1 = rows.y1;
   const auto inside = [&](int x, int y) {
     return sign * edge(s1, s2, x, y) >= 0 && sign * edge(s2, s0, x, y) >= 0 && sign * edge(s0, s1, x, y) >= 0;
   };
@@ -110,23 +141,32 @@ bool project_vertices(const Mesh& mesh, const Pose& model_to_cam, const Intrinsi
 // Scan-converts the projected mesh; on_pixel(x, y, z, normal) for each covered pixel centre in
 // the box, with the exact depth of the triangle's plane along that pixel's ray; on_row(y, first,
 // last) for each row a face is scanned in, with the columns scanned (image coordinates).
+// all_in_front: every vertex lies in front of the lens (project_vertices said so), no face is
+// tested for it.
 template <typename OnPixel, typename OnRow = NoRows>
 void draw_perspective(const Mesh& mesh, const ProjectedMesh& pm, const Intrinsics& k, int x0, int y0, int x1,
-                      int y1, Winding winding, OnPixel on_pixel, OnRow on_row = {}) {
+                      int y1, Winding winding, bool all_in_front, OnPixel on_pixel, OnRow on_row = {}) {
   const Eigen::Vector2d corner(x0, y0);
   // A face is turned away when its outward normal points away from the camera (at the origin).
   const double away = winding == Winding::outward ? 1 : winding == Winding::inward ? -1 : 0;
   for (const auto& f : mesh.faces) {
     const Eigen::Vector3d &p0 = pm.cam[f[0]], &p1 = pm.cam[f[1]], &p2 = pm.cam[f[2]];
-    if (p0.z() <= 1 || p1.z() <= 1 || p2.z() <= 1) continue;  // behind or at the lens
+    if (!all_in_front && (p0.z() <= 1 || p1.z() <= 1 || p2.z() <= 1)) continue;  // behind or at the lens
     Eigen::Vector3d n = (p1 - p0).cross(p2 - p0);
     if (away * n.dot(p0) > 0) continue;
-    if (n.norm() < 1e-12) continue;
-    n.normalize();
+    // A face whose box spans no row of pixel centres draws nothing and is told to no row: left
+    // before its plane is worked out (a welded tube's faces are a pixel or two across, many of
+    // them between rows).
+    const Eigen::Vector2d s0 = pm.px[f[0]] - corner, s1 = pm.px[f[1]] - corner, s2 = pm.px[f[2]] - corner;
+    const ScanRows rows = scan_rows(s0, s1, s2, y1 - y0 + 1);
+    if (rows.y0 > rows.y1) continue;
+    const double length = n.norm();
+    if (length < 1e-12) continue;
+    n /= length;                // normalize(), its norm not worked out again
     if (n.dot(p0) > 0) n = -n;  // face the camera: depth images see either side
     const double plane = n.dot(p0);
     scan_triangle(
-        pm.px[f[0]] - corner, pm.px[f[1]] - corner, pm.px[f[2]] - corner, x1 - x0 + 1, y1 - y0 + 1,
+        s0, s1, s2, x1 - x0 + 1, rows,
         [&](int xr, int yr) {
           const int x = xr + x0, y = yr + y0;
           const Eigen::Vector3d ray((x - k.cx) / k.fx, (y - k.cy) / k.fy, 1.0);
@@ -146,7 +186,7 @@ void render_perspective(const Mesh& mesh, const Pose& model_to_cam, const Intrin
   ProjectedMesh pm;
   pm.reserve(mesh);
   project_vertices(mesh, model_to_cam, k, &pm);
-  draw_perspective(mesh, pm, k, 0, 0, target->z_mm.width - 1, target->z_mm.height - 1, Winding::open,
+  draw_perspective(mesh, pm, k, 0, 0, target->z_mm.width - 1, target->z_mm.height - 1, Winding::open, false,
                    [&](int x, int y, float z, const Eigen::Vector3d& n) {
                      float& cur = target->z_mm.at(x, y);
                      if (cur == 0 || z < cur) {
@@ -180,7 +220,7 @@ PixelBox render_depth_in_box(const Mesh& mesh, const Pose& model_to_cam, const I
     std::fill(pm->row_last.begin() + box.y0, pm->row_last.begin() + box.y1 + 1, box.x0 - 1);
   }
   draw_perspective(
-      mesh, *pm, k, box.x0, box.y0, box.x1, box.y1, winding,
+      mesh, *pm, k, box.x0, box.y0, box.x1, box.y1, winding, true,
       [&](int x, int y, float z, const Eigen::Vector3d&) {
         float& cur = z_mm->at(x, y);
         if (cur == 0 || z < cur) cur = z;
@@ -210,14 +250,15 @@ void render_height(const Mesh& mesh, const Pose& model_to_world, Envelope which,
     const Eigen::Vector3d n = (p1 - p0).cross(p2 - p0);
     if (std::abs(n.z()) < 1e-12) continue;  // vertical faces add nothing to a height map
     const double plane = n.dot(p0);
-    scan_triangle(map->to_cell(p0.x(), p0.y()), map->to_cell(p1.x(), p1.y()), map->to_cell(p2.x(), p2.y()),
-                  map->z_mm.width, map->z_mm.height, [&](int i, int j) {
-                    const double x = map->origin_x_mm + i * map->cell_mm;
-                    const double y = map->origin_y_mm + j * map->cell_mm;
-                    const float z = float((plane - n.x() * x - n.y() * y) / n.z());
-                    float& cur = map->z_mm.at(i, j);
-                    cur = top ? std::max(cur, z) : std::min(cur, z);
-                  });
+    const Eigen::Vector2d c0 = map->to_cell(p0.x(), p0.y()), c1 = map->to_cell(p1.x(), p1.y()),
+                          c2 = map->to_cell(p2.x(), p2.y());
+    scan_triangle(c0, c1, c2, map->z_mm.width, scan_rows(c0, c1, c2, map->z_mm.height), [&](int i, int j) {
+      const double x = map->origin_x_mm + i * map->cell_mm;
+      const double y = map->origin_y_mm + j * map->cell_mm;
+      const float z = float((plane - n.x() * x - n.y() * y) / n.z());
+      float& cur = map->z_mm.at(i, j);
+      cur = top ? std::max(cur, z) : std::min(cur, z);
+    });
   }
 }
 
