@@ -668,7 +668,8 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
   PipeEstimate &best = out.best, &second = out.second;
   bool &have_best = out.have_best, &have_second = out.have_second;
   // The pose whose render the scratch buffers hold (verify_at's last): the points the best
-  // explains are read from it where it is the best's, not drawn again (the same depths).
+  // explains are read from it where it is the best's, not drawn again (the same depths). Whatever
+  // else draws into the scratch (telling_pixels) clears scratch_holds_pose.
   Pose scratch_pose = Pose::Identity();
   PixelBox scratch_box;  // ... and the box it was drawn in
   bool scratch_holds_pose = false;
