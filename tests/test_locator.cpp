@@ -939,6 +939,12 @@ TEST(LocateOutput, APosePinnedAtBothEndsIsHandedOutAsOneSeenEnding) {
   EXPECT_EQ(LocateOutput::hand_out_order(out.estimates[0]), 1);
   out.estimates = {estimate(1, 0), estimate(0, 0)};
   EXPECT_EQ(out.pick(), 0);  // neither placed: rank order
+  // One end pinned and seen ending but for the sensor's shadow: placed, before a worse-ranked pose
+  // seen ending outright.
+  out.estimates = {estimate(1, 0), estimate(1, 1)};
+  out.estimates[0].check.ends_ending_past_shadow = 1;
+  EXPECT_EQ(out.pick(), 0);
+  EXPECT_EQ(LocateOutput::hand_out_order(out.estimates[0]), 0);
 }
 
 }  // namespace

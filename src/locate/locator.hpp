@@ -35,20 +35,23 @@ struct LocateOutput {
   // The order the pickable poses are handed out in, lower first (-1: not handed out): the first
   // searches' before the second searches' (second_search_may_pick: those only where the first have
   // none), and of each, a pose its ends place before one they do not, in rank order. A pose is
-  // placed so by an end the image shows ending outright, or by both ends pinned (more than
-  // placed_by_ends() of the candidates asks: one pinned, none going on). A pose pinned only past a
-  // hidden tip may lie slid along its pipe: an arc wholly in view so handed out 30-57 mm round
-  // itself before a right pose of another arc with an end seen ending ranked second (4 wrong picks
-  // clearing 3 bins). Pinned at both ends, a pose is placed as well: a 758 mm arc so pinned,
-  // agreeing 0.96, was passed over for one seen ending at its one end in view, handed out off every
-  // pipe (seed 20's 14-arc of the zoo; docs/experiments.md).
+  // placed so by an end the image shows ending, outright or but for the sensor's shadow, or by both
+  // ends pinned (more than placed_by_ends() of the candidates asks: one pinned, none going on). A
+  // pose pinned only past a hidden tip may lie slid along its pipe: an arc wholly in view so handed
+  // out 30-57 mm round itself before a right pose of another arc with an end seen ending ranked
+  // second (4 wrong picks clearing 3 bins). Pinned at both ends, a pose is placed as well: a 758 mm
+  // arc so pinned, agreeing 0.96, was passed over for one seen ending at its one end in view,
+  // handed out off every pipe (seed 20's 14-arc of the zoo). So is one whose end in view ends
+  // beside the shadow it casts (the first probe past the tip unread, the second lower): coils and
+  // arcs so placed, on their pipes, were passed over for poses seen ending elsewhere
+  // (docs/experiments.md).
   static constexpr int kHandOutOrders = 4;
-  static bool seen_ending_or_pinned_at_both_ends(const PipeEstimate& e) {
-    return e.check.ends_seen_ending > 0 || e.check.ends_pinned >= 2;
+  static bool shown_ending_or_pinned_at_both_ends(const PipeEstimate& e) {
+    return e.check.ends_seen_ending > 0 || e.check.ends_ending_past_shadow > 0 || e.check.ends_pinned >= 2;
   }
   static int hand_out_order(const PipeEstimate& e) {
     if (!e.pickable) return -1;
-    return (e.searched_again ? 2 : 0) + (seen_ending_or_pinned_at_both_ends(e) ? 0 : 1);
+    return (e.searched_again ? 2 : 0) + (shown_ending_or_pinned_at_both_ends(e) ? 0 : 1);
   }
   // Calls f(i) for each estimate handed out, in that order, until f returns false.
   template <typename F>
