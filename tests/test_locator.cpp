@@ -921,7 +921,8 @@ TEST(LocateOutput, APoseSeenEndingOutrightIsHandedOutBeforeOneThatIsNot) {
 }
 
 // ... and a pose pinned at both ends, though neither is seen ending outright, is placed by its
-// ends as well as one seen ending: handed out in rank order with it. One pinned end is not enough.
+// ends as well as one seen ending: handed out in rank order with it. One pinned end is not enough,
+// unless it is seen ending but for the sensor's shadow.
 TEST(LocateOutput, APosePinnedAtBothEndsIsHandedOutAsOneSeenEnding) {
   const auto estimate = [](int pinned, int seen_ending) {
     PipeEstimate e;
