@@ -1016,7 +1016,7 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
       PipeEstimate slid = slid_best(found, *best_slide, best_slide_check);
       read_ends_and_floor(&slid);
       if (turn_may_replace(slid.check, best.check) &&
-          slid.check.ends_seen_ending + slid.check.ends_ending_past_shadow >= best.check.ends_seen_ending &&
+          slid.check.ends_shown_ending() >= best.check.ends_seen_ending &&
           as_good(slid.check, best.check, cfg))
         moved_best_to(slid);
     }

@@ -47,7 +47,7 @@ struct LocateOutput {
   // (docs/experiments.md).
   static constexpr int kHandOutOrders = 4;
   static bool shown_ending_or_pinned_at_both_ends(const PipeEstimate& e) {
-    return e.check.ends_seen_ending > 0 || e.check.ends_ending_past_shadow > 0 || e.check.ends_pinned >= 2;
+    return e.check.ends_shown_ending() > 0 || e.check.ends_pinned >= 2;
   }
   static int hand_out_order(const PipeEstimate& e) {
     if (!e.pickable) return -1;

@@ -65,8 +65,10 @@ struct Verification {
   // ... and those seen ending but for the sensor's shadow: the tip shown, the first probe beyond it
   // reading nothing and the second lower. A raised end casts the sensor's shadow on what lies
   // beyond it; the first probe (0.75 D past the tip) can fall in it, while a pose slid past the
-  // end, over the shadow, reads both probes lower (place_slides_finely counts these ends).
+  // end, over the shadow, reads both probes lower (place_slides_finely and the hand-out order
+  // count these ends, with those seen ending outright: ends_shown_ending()).
   int ends_ending_past_shadow = 0;
+  int ends_shown_ending() const { return ends_seen_ending + ends_ending_past_shadow; }
   // ... and those pinned by the probe read further along the bend alone (EndReading::read_further):
   // nothing was read between the tip and it, where the tube may go on.
   int ends_pinned_further = 0;
