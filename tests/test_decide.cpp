@@ -638,6 +638,34 @@ TEST(Decide, ThresholdsComeFromTheConfig) {
   EXPECT_FALSE(decide(again, cfg).pickable);
 }
 
+// Up to verify_max_outside_view_ends_seen (three quarters) of a pipe that does not slide along
+// itself may lie out of the view where both its ends in view are seen ending outright, the tube
+// going on beyond neither, and what is in view agrees verify_well_seen_agreement: a U whose bend
+// runs out of the view. One end seen, the other out of the view, stays "part seen" beyond half.
+TEST(Decide, APipeShowingBothEndsEndingMayReachFurtherOutOfTheView) {
+  LocateConfig cfg;
+  // `share` out of the view, from a short region, `pinned` ends pinned, `seen_end` seen ending outright.
+  const auto out_of_view = [](float share, int pinned, int seen_end) {
+    return from_short_region(
+        seen_ending(ends_read(judged(outside_view(seen(950, 0, 0), share)), pinned, 0, 0, 0), seen_end));
+  };
+  EXPECT_TRUE(decide(out_of_view(0.65f, 2, 2), cfg).pickable);
+  EXPECT_TRUE(decide(out_of_view(0.75f, 2, 2), cfg).pickable);
+  const auto withheld_part_seen = [&](const Evidence& e) {
+    const Decision d = decide(e, cfg);
+    return !d.pickable && (d.withheld & kWithheldPartSeen) != 0;
+  };
+  EXPECT_TRUE(withheld_part_seen(out_of_view(0.8f, 2, 2)));                        // further out
+  EXPECT_TRUE(withheld_part_seen(ends_out_of_view(out_of_view(0.65f, 1, 1), 1)));  // one end seen
+  EXPECT_TRUE(withheld_part_seen(out_of_view(0.65f, 2, 1)));                       // one pinned past its tip
+  EXPECT_TRUE(withheld_part_seen(slides_in_view(out_of_view(0.65f, 2, 2))));       // its part in view slides
+  Evidence less_agreeing = out_of_view(0.65f, 2, 2);
+  less_agreeing.best.agree_px = 850;  // 0.85 of what is in view: not well seen
+  EXPECT_TRUE(withheld_part_seen(less_agreeing));
+  cfg.verify_max_outside_view_ends_seen = 0.5;  // no further than the well-seen rule
+  EXPECT_TRUE(withheld_part_seen(out_of_view(0.65f, 2, 2)));
+}
+
 // A pose is handed out only where the sensor resolves the tube: its relief (0.223 R, RMS) over the
 // pixels confirming it, against the frame's measured noise, at least pick_min_relief_sigmas. 38
 // pixels of a 20 mm tube: 6.9 sigmas at 2 mm of noise, 2.7 at 5 mm.

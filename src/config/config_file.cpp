@@ -248,6 +248,7 @@ void read_locate(Section& s, LocateConfig* c) {
   s.real("verify_max_occluded", &c->verify_max_occluded, 0, 1, "share");
   s.real("verify_max_outside_view", &c->verify_max_outside_view, 0, 1, "share");
   s.real("verify_max_outside_view_well_seen", &c->verify_max_outside_view_well_seen, 0, 1, "share");
+  s.real("verify_max_outside_view_ends_seen", &c->verify_max_outside_view_ends_seen, 0, 1, "share");
   s.real("verify_well_seen_agreement", &c->verify_well_seen_agreement, 0, 1, "share");
   s.real("side_drop_of_d", &c->side_drop_of_d, 0, 5, "x D");
   s.real("verify_max_side_level", &c->verify_max_side_level, 0, 1, "share (1: off)");

@@ -156,6 +156,11 @@ struct LocateConfig {
                                                    // ends are read, one end is pinned); an
                                                    // ambiguous pose further out of view is no
                                                    // estimate
+  double verify_max_outside_view_ends_seen = 0.75;  // ... or up to this share where, of a pipe
+                                                    // that does not slide along itself, what is
+                                                    // in view agrees as well and both its ends
+                                                    // are seen ending outright, the tube going on
+                                                    // beyond neither (0: off)
   double side_drop_of_d = 0.25;            // a pipe's surroundings lie at least this * D beyond its silhouette ...
   double verify_max_side_level = 0.3;      // ... but for at most this share (more: a smooth blob, not a pipe)
   // Beyond the paper: a pose is handed out only where the sensor resolves the tube: its relief (a
@@ -250,6 +255,7 @@ inline void use_paper_search(LocateConfig* c) {
   c->follow_slides_to_ends = false;
   c->pin_part_in_view_by_ends = false;
   c->end_unread_as_out_of_view = false;
+  c->verify_max_outside_view_ends_seen = 0;
   c->ends_read_further = false;
   c->ends_read_slanted = false;
   c->ends_probed_past_itself = false;
