@@ -664,6 +664,9 @@ TEST(Decide, APipeShowingBothEndsEndingMayReachFurtherOutOfTheView) {
   EXPECT_TRUE(withheld_part_seen(less_agreeing));
   cfg.verify_max_outside_view_ends_seen = 0.5;  // no further than the well-seen rule
   EXPECT_TRUE(withheld_part_seen(out_of_view(0.65f, 2, 2)));
+  LocateConfig paper;
+  use_paper_search(&paper);  // the paper's pipeline: off
+  EXPECT_NE(decide(out_of_view(0.65f, 2, 2), paper).withheld & kWithheldPartSeen, 0u);
 }
 
 // A pose is handed out only where the sensor resolves the tube: its relief (0.223 R, RMS) over the
