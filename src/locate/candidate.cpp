@@ -437,22 +437,23 @@ Decision decide(const Evidence& given, const LocateConfig& cfg) {
       e.best.ends_out_of_view >= 2 ||
       (cfg.end_unread_as_out_of_view && !e.model_slides && !e.best.part_in_view_slides &&
        e.best.ends_out_of_view >= 1 && e.best.ends_continued == 0);
-  // ... or, up to verify_max_outside_view_ends_seen of it out of the view, a pipe that does not
-  // slide along itself is well seen and shows both its ends in view seen ending outright, the tube
-  // going on beyond neither: its ends and the bends between them place it, whatever its part out of
-  // the view (a U or a planar bend whose middle runs out of the view, both ends seen: right poses
-  // withheld on 19 frames where bins of the zoo stopped; twelve bins of every shape took 30 more
-  // pipes of 06-U, 07-U, 23-planar and 24-planar, no wrong pick more; docs/experiments.md).
+  // ... and where a pipe that does not slide along itself shows both its ends in view seen ending
+  // outright, the tube going on beyond neither, its ends and the bends between them place it,
+  // whatever its part out of the view: so well seen, up to verify_max_outside_view_ends_seen of it
+  // may lie out of the view (a U or a planar bend whose middle runs out of the view, both ends
+  // seen: right poses withheld on 19 frames where bins of the zoo stopped; twelve bins of every
+  // shape took 30 more pipes of 06-U, 07-U, 23-planar and 24-planar, no wrong pick more;
+  // docs/experiments.md).
   const bool placed_by_both_ends = e.ends_judged && !e.model_slides && !e.best.part_in_view_slides &&
-                                   e.best.ends_seen_ending >= 2 && e.best.ends_continued == 0 && well_seen &&
-                                   e.best.outside_view <= float(cfg.verify_max_outside_view_ends_seen);
+                                   e.best.ends_seen_ending >= 2 && e.best.ends_continued == 0;
+  const double most_out_well_seen = placed_by_both_ends ? std::max(cfg.verify_max_outside_view_well_seen,
+                                                                   cfg.verify_max_outside_view_ends_seen)
+                                                        : cfg.verify_max_outside_view_well_seen;
   const bool checked_in_view =
       (e.best.outside_view <= float(cfg.verify_max_outside_view) &&
        confirmed_of_whole >= float(cfg.verify_min_agreement)) ||
-      ((!e.short_region || short_but_placed) &&
-       e.best.outside_view <= float(cfg.verify_max_outside_view_well_seen) && well_seen &&
-       (!e.ends_judged || pinned_beside_tip > 0 || ends_unshown_or_out)) ||
-      placed_by_both_ends;
+      ((!e.short_region || short_but_placed) && e.best.outside_view <= float(most_out_well_seen) &&
+       well_seen && (!e.ends_judged || pinned_beside_tip > 0 || ends_unshown_or_out));
   // Beyond the paper: where the image shows the tube going on beyond both ends of the pose, the
   // pipe there is longer than the pose: it lies elsewhere along it (slid round a bend, across
   // two pipes).
