@@ -595,6 +595,35 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
   }
 }
 
+// An ambiguous pose says why, a reason for each rule that made it so; a pose not ambiguous, none.
+TEST(Decide, AnAmbiguousPoseSaysWhy) {
+  const LocateConfig cfg;
+  Evidence twin_far = judged(seen(900, 0, 0));
+  twin_far.twin_unresolved = true;
+  const struct {
+    const char* name;
+    Evidence evidence;
+    unsigned why;
+  } rows[] = {
+      {"a pose alone", judged(seen(900, 0, 0)), 0u},
+      {"a rival as good", judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), kAmbiguousRival},
+      {"sliding, no end seen", sliding(judged(seen(900, 0, 0)), 0, 0), kAmbiguousSlides},
+      {"its turn about its length not told", turn_unsure(judged(seen(900, 0, 0))), kAmbiguousRoll},
+      {"another part of it as well in view", other_part_unsure(judged(seen(900, 0, 0))), kAmbiguousOtherPart},
+      {"its near twin beyond the view's resolution", twin_far, kAmbiguousTwinUnresolved},
+      {"a rival as good and its turn not told",
+       turn_unsure(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0))), kAmbiguousRival | kAmbiguousRoll},
+  };
+  for (const auto& row : rows) {
+    SCOPED_TRACE(row.name);
+    const Decision d = decide(row.evidence, cfg);
+    EXPECT_EQ(d.ambiguous_why, row.why);
+    EXPECT_EQ(d.ambiguous, row.why != 0);
+  }
+  EXPECT_STREQ(ambiguity_name(ambiguity_index(kAmbiguousTwinUnresolved)), "twin_unresolved");
+  EXPECT_STREQ(ambiguity_label(ambiguity_index(kAmbiguousOtherPart)), "OTHER PART");
+}
+
 // The checks follow the config's thresholds, not fixed numbers.
 TEST(Decide, ThresholdsComeFromTheConfig) {
   LocateConfig cfg;

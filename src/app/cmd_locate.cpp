@@ -64,6 +64,10 @@ Json estimate_json(const PipeEstimate& e, int rank, bool pick) {
   for (int k = 0; k < kWithheldKinds; ++k)
     if (e.withheld & (1u << k)) withheld.push_back(withheld_name(k));
   j["withheld"] = withheld;
+  Json ambiguous_why = Json::array();  // why it is ambiguous (empty where it is not)
+  for (int k = 0; k < kAmbiguityKinds; ++k)
+    if (e.ambiguous_why & (1u << k)) ambiguous_why.push_back(ambiguity_name(k));
+  j["ambiguous_why"] = ambiguous_why;
   j.update(verification_json(e.check));
   return j;
 }

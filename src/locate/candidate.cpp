@@ -235,6 +235,18 @@ const char* withheld_name(int k) {
   return k >= 0 && k < kWithheldKinds ? names[k] : "?";
 }
 
+const char* ambiguity_name(int k) {
+  static const char* const names[kAmbiguityKinds] = {"twin_unresolved", "rival",        "slides", "roll",
+                                                     "other_part",      "read_two_ways"};
+  return k >= 0 && k < kAmbiguityKinds ? names[k] : "?";
+}
+
+const char* ambiguity_label(int k) {
+  static const char* const labels[kAmbiguityKinds] = {"TWIN FAR", "RIVAL",      "SLIDES",
+                                                      "ROLL",     "OTHER PART", "TWO WAYS"};
+  return k >= 0 && k < kAmbiguityKinds ? labels[k] : "?";
+}
+
 const char* withheld_label(int k) {
   static const char* const labels[kWithheldKinds] = {"AMBIGUOUS", "COVERED", "PART SEEN", "GOES ON",
                                                      "NO END",    "UNSURE",  "NOISY",     "TOOK NOTHING"};
@@ -354,25 +366,29 @@ Decision decide(const Evidence& given, const LocateConfig& cfg) {
   const bool rival_as_good = as_good(e.second, e.best, cfg) ||
                              (cfg.rivals_judged_where_seen && e.best.ends_pinned == 0 &&
                               as_good_where_read(e.second, e.best, cfg, /*in_front_left_out=*/true));
-  out.ambiguous =
-      e.have_second && rival_as_good && !(ends_tell && best_ends_shown > rival_ends_shown) && !told_apart;
+  // Each rule that makes the pose ambiguous names itself (Ambiguity's bits: `locate`, the overlay).
+  const auto ambiguous_if = [&out](bool holds, unsigned why) { out.ambiguous_why |= holds ? why : 0u; };
+  ambiguous_if(
+      e.have_second && rival_as_good && !(ends_tell && best_ends_shown > rival_ends_shown) && !told_apart,
+      kAmbiguousRival);
   // Beyond the paper: a pipe that slides along itself is placed along its length only by an end
   // the image shows; where none is seen, or the tube goes on beyond one, the pose may be slid.
-  if (e.ends_must_pin && (e.best.ends_pinned == 0 || e.best.ends_continued > 0)) out.ambiguous = true;
+  ambiguous_if(e.ends_must_pin && (e.best.ends_pinned == 0 || e.best.ends_continued > 0), kAmbiguousSlides);
   // ... and so a pose whose part in the view slides along the pipe, reaching out of the view
   // (pin_part_in_view_by_ends): six bins of every shape handed out an arc's loop laid along
   // another part of its arc, pinned where its pipe ran under another, 237 mm off (15-arc of seed
   // 21); a long arc pinned past a pipe across its end, 40 mm round it (14-arc of seed 20); a coil's
   // loop at the image's edge, both ends out of the view, 82 mm off (18-coil of seed 21).
-  if (e.best.part_in_view_slides && (e.best.ends_seen_ending == 0 || e.best.ends_continued > 0))
-    out.ambiguous = true;
+  ambiguous_if(e.best.part_in_view_slides && (e.best.ends_seen_ending == 0 || e.best.ends_continued > 0),
+               kAmbiguousSlides);
   // ... and one whose turn about its own length the image does not tell (judge_rolls).
-  if (e.roll_unsure) out.ambiguous = true;
+  ambiguous_if(e.roll_unsure, kAmbiguousRoll);
   // ... and one whose part in view another part of the pipe could be (judge_other_parts).
-  if (e.other_part_unsure) out.ambiguous = true;
+  ambiguous_if(e.other_part_unsure, kAmbiguousOtherPart);
   // ... and one further from the camera than where one pixel covers its near twin's spread
   // everywhere: no pixel can tell the two apart (twin_beyond_resolution_ambiguous).
-  if (e.twin_unresolved) out.ambiguous = true;
+  ambiguous_if(e.twin_unresolved, kAmbiguousTwinUnresolved);
+  out.ambiguous = out.ambiguous_why != 0;
   // An ambiguous pose further out of the view than any pose may be picked is not placed by the
   // image: neither its part out of the view nor its rival's is checked. It is no estimate (the
   // zoo's 16-arc, its arcs reaching out of the view: 10 of its 13 false estimates).
@@ -1159,6 +1175,7 @@ bool work_candidate(const CandidateContext& ctx, const CandidateInput& in, const
   if (decision.outcome != CandidateOutcome::accepted) return false;
   *estimate = taken;
   estimate->ambiguous = decision.ambiguous;
+  estimate->ambiguous_why = decision.ambiguous_why;
   estimate->score = decision.score;
   estimate->pickable = decision.pickable;
   estimate->unresolved = decision.unresolved;

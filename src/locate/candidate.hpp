@@ -81,19 +81,43 @@ enum Withheld : unsigned {
                                     // (the service's service.withhold_unchanged_picks)
 };
 constexpr int kWithheldKinds = 8;
+// The place of the lowest of the first `kinds` bits set; `kinds` where none is.
+constexpr int first_bit_index(unsigned bits, int kinds) {
+  int k = 0;
+  while (k < kinds && !(bits & (1u << k))) ++k;
+  return k;
+}
 // The place of the first bit set, in Withheld's order: a bit's own place (the index of its count,
 // CycleRecord::withheld, and of its name), or the first check a pose fails (the overlay's label);
 // kWithheldKinds where none is set.
-constexpr int withheld_index(unsigned bits) {
-  int k = 0;
-  while (k < kWithheldKinds && !(bits & (1u << k))) ++k;
-  return k;
-}
+constexpr int withheld_index(unsigned bits) { return first_bit_index(bits, kWithheldKinds); }
 // The bit's name (`ambiguous`, `covered`, `part_seen`, `goes_on`, `no_end`, `second_search`,
 // `noisy`, `took_nothing`) and the overlay's label for it (AMBIGUOUS, COVERED, PART SEEN, GOES ON, NO END,
 // UNSURE, NOISY, TOOK NOTHING); k-th bit for k in [0, kWithheldKinds).
 const char* withheld_name(int k);
 const char* withheld_label(int k);
+
+// Why a pose is ambiguous: one bit per reason another pose fits about as well. `locate` names them
+// all in `ambiguous_why`; the overlay adds the first to AMBIGUOUS.
+enum Ambiguity : unsigned {
+  kAmbiguousTwinUnresolved = 1u << 0,  // further than one pixel covers its near twin's spread
+                                       // (twin_beyond_resolution_ambiguous): mount the camera nearer
+  kAmbiguousRival = 1u << 1,           // a rival pose the image judges about as well and does not tell
+                                       // apart (a near twin, the pipe slid or laid another way)
+  kAmbiguousSlides = 1u << 2,          // the pipe, or its part in view, slides along itself and no
+                                       // end seen ending places it
+  kAmbiguousRoll = 1u << 3,            // a turn about its own length as good (judge_rolls)
+  kAmbiguousOtherPart = 1u << 4,       // another part of the pipe could be its part in view
+                                       // (judge_other_parts)
+  kAmbiguousReadTwoWays = 1u << 5,     // one pipe read two ways by two regions (rivals_across_regions)
+};
+constexpr int kAmbiguityKinds = 6;
+// The place of the first reason set (kAmbiguityKinds where none is); the bit's name
+// (`twin_unresolved`, `rival`, `slides`, `roll`, `other_part`, `read_two_ways`) and the overlay's
+// label for it (TWIN FAR, RIVAL, SLIDES, ROLL, OTHER PART, TWO WAYS); k-th bit.
+constexpr int ambiguity_index(unsigned bits) { return first_bit_index(bits, kAmbiguityKinds); }
+const char* ambiguity_name(int k);
+const char* ambiguity_label(int k);
 
 struct PipeEstimate {
   Pose model_to_bin = Pose::Identity();
@@ -106,6 +130,7 @@ struct PipeEstimate {
   float refine_rms_mm = 0;
   Verification check;
   bool ambiguous = false;  // another pose of the model fits about as well (torus-like pipes)
+  unsigned ambiguous_why = 0;  // ... why (Ambiguity bits; 0 where it is not ambiguous)
   bool pickable = false;   // accepted, not lying under another pipe, not ambiguous, its tube resolved
   int candidate = -1;      // index of its candidate region
   bool searched_again = false;  // found by its region's second search: picked only if no other is
@@ -196,6 +221,7 @@ struct Decision {
   bool decided = false;  // false: the evidence so far passes every check it can answer
   CandidateOutcome outcome = CandidateOutcome::budget;
   bool ambiguous = false;
+  unsigned ambiguous_why = 0;  // why it is ambiguous (Ambiguity bits)
   bool pickable = false;
   float score = 0;
   bool rival_taken = false;  // the rival, not the best, is the pipe (its ends shown where they are)

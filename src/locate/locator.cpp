@@ -395,6 +395,7 @@ void Locator::mark_pipes_read_two_ways() {
       for (PipeEstimate* e : {&es[i], &es[j]}) {
         if (!e->ambiguous) e->score *= kAmbiguousScoreFactor;
         e->ambiguous = true;
+        e->ambiguous_why |= kAmbiguousReadTwoWays;
         e->pickable = e->unresolved = false;
         e->withheld |= kWithheldAmbiguous;
       }

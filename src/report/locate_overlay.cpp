@@ -52,7 +52,10 @@ struct LegendEntry {
 const LegendEntry kLegend[] = {{kPick, "PICK: POSE HANDED TO THE PLC"},
                                {kOutline, "POSE, PICKABLE (R<RANK> <SCORE> OK)"},
                                {kOther, "POSE, NOT PICKABLE (R<RANK> <SCORE> WHY):"},
-                               {kOther, " AMBIGUOUS: A TWIN OR SLID POSE FITS AS WELL", false},
+                               {kOther, " AMBIGUOUS <WHY>: ANOTHER POSE FITS AS WELL:", false},
+                               {kOther, "  TWIN FAR (TOO FAR TO TELL ITS TWIN), RIVAL (A TWIN OR", false},
+                               {kOther, "  SLID POSE), SLIDES (ALONG ITSELF), ROLL (ABOUT ITS", false},
+                               {kOther, "  LENGTH), OTHER PART (OF IT), TWO WAYS (TWO REGIONS)", false},
                                {kOther, " COVERED: UNDER OTHERS  PART SEEN: TOO LITTLE SEEN", false},
                                {kOther, " GOES ON: THE TUBE GOES ON PAST BOTH ENDS", false},
                                {kOther, " NO END: NO END SEEN ENDING", false},
@@ -203,10 +206,15 @@ Image<Rgb> draw_locate_overlay(const Locator& loc, const Image<float>& depth, co
         cam.intrinsics.project(e.model_to_cam * loc.locator_model().centroid.cast<double>());
     if (!c.allFinite()) continue;
     // Not pickable: the first check it fails (Withheld's order), NO where none is named.
+    // AMBIGUOUS names its first reason (Ambiguity's order).
     const int first = withheld_index(e.withheld);
     const char* why = first < kWithheldKinds ? withheld_label(first) : "NO";
-    char tail[16] = "", text[48];
-    if (i != pick) std::snprintf(tail, sizeof tail, " %s", e.pickable ? "OK" : why);
+    const int because = ambiguity_index(e.ambiguous_why);
+    const bool says_because = (1u << first) == kWithheldAmbiguous && because < kAmbiguityKinds;
+    char tail[40] = "", text[72];
+    if (i != pick)
+      std::snprintf(tail, sizeof tail, " %s%s%s", e.pickable ? "OK" : why, says_because ? " " : "",
+                    says_because ? ambiguity_label(because) : "");
     std::snprintf(text, sizeof text, "%sR%d %.2f%s", i == pick ? "PICK " : "", i, e.score, tail);
     // Beside the centre, moved into the image and off the legend: a pose reaching out of the view
     // has its centre near the image's edge or beyond it.

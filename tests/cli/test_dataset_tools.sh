@@ -32,6 +32,9 @@ poses = [o for o in objects if "rank" in o]
 assert poses, "no pose"
 for p in poses:
     assert set(p["withheld"]) <= names and (not p["withheld"]) == p["pickable"], p
+    # ... and, ambiguous, why: a reason named exactly where it is.
+    reasons = {"rival", "slides", "roll", "other_part", "twin_unresolved", "read_two_ways"}
+    assert set(p["ambiguous_why"]) <= reasons and bool(p["ambiguous_why"]) == p["ambiguous"], p
 PY
 grep -q "pipes found" "$work/locate.log" || fail "locate logs no summary on stderr: $(cat "$work/locate.log")"
 
