@@ -588,7 +588,7 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
     EXPECT_EQ(d.decided, row.decided);
     if (!row.decided) continue;
     EXPECT_STREQ(outcome_name(d.outcome), outcome_name(row.outcome));
-    EXPECT_EQ(d.ambiguous, row.ambiguous);
+    EXPECT_EQ(d.ambiguous(), row.ambiguous);
     EXPECT_EQ(d.pickable, row.pickable);
     EXPECT_NEAR(d.score, row.score, 1e-5f);
     EXPECT_EQ(d.rival_taken, row.rival_taken);
@@ -618,7 +618,7 @@ TEST(Decide, AnAmbiguousPoseSaysWhy) {
     SCOPED_TRACE(row.name);
     const Decision d = decide(row.evidence, cfg);
     EXPECT_EQ(d.ambiguous_why, row.why);
-    EXPECT_EQ(d.ambiguous, row.why != 0);
+    EXPECT_EQ(d.ambiguous(), row.why != 0);
   }
   EXPECT_STREQ(ambiguity_name(ambiguity_index(kAmbiguousTwinUnresolved)), "twin_unresolved");
   EXPECT_STREQ(ambiguity_label(ambiguity_index(kAmbiguousOtherPart)), "OTHER PART");
@@ -648,15 +648,15 @@ TEST(Decide, ThresholdsComeFromTheConfig) {
   cfg.verify_max_outside_view = 0.4;
   EXPECT_TRUE(decide(judged(outside_view(seen(1000, 0, 0), 0.35f)), cfg).pickable);
   const Evidence told_apart = told(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), 100, 0);
-  EXPECT_FALSE(decide(told_apart, cfg).ambiguous);
+  EXPECT_FALSE(decide(told_apart, cfg).ambiguous());
   cfg.tell_rivals_apart = false;
-  EXPECT_TRUE(decide(told_apart, cfg).ambiguous);
+  EXPECT_TRUE(decide(told_apart, cfg).ambiguous());
   const Evidence rival_under_a_pipe = judged_with_rival(seen(900, 0, 0), seen(840, 0, 60));
-  EXPECT_TRUE(decide(rival_under_a_pipe, cfg).ambiguous);
+  EXPECT_TRUE(decide(rival_under_a_pipe, cfg).ambiguous());
   cfg.rivals_judged_where_seen = false;  // off: its part under a pipe counts against it
-  EXPECT_FALSE(decide(rival_under_a_pipe, cfg).ambiguous);
+  EXPECT_FALSE(decide(rival_under_a_pipe, cfg).ambiguous());
   cfg.ambiguity_quality_margin = 0.01;
-  EXPECT_FALSE(decide(judged_with_rival(seen(900, 0, 0), seen(860, 0, 0)), cfg).ambiguous);
+  EXPECT_FALSE(decide(judged_with_rival(seen(900, 0, 0), seen(860, 0, 0)), cfg).ambiguous());
   const Evidence half_read = seen_ending(ends_read(judged(unread(seen(450, 0, 0), 550)), 2, 0, 0, 0), 2);
   EXPECT_EQ(decide(half_read, cfg).outcome, CandidateOutcome::accepted);  // 450 of 500 counted
   cfg.verify_min_read_share = 1;  // off: unread pixels count against the pose

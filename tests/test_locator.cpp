@@ -519,7 +519,7 @@ TEST(Locator, AThinSymmetricPipeIsPickable) {
     for (std::size_t k = 0; k < out.estimates.size(); ++k) {
       if (nearest_pipe_error(model, out.estimates[k].model_to_cam, s) >= 5) continue;
       ++right;
-      ambiguous += out.estimates[k].ambiguous;
+      ambiguous += out.estimates[k].ambiguous();
       picked_right += int(k) == out.pick();
     }
   }
@@ -840,7 +840,7 @@ TEST(Locator, ANearTwinTheCameraDoesNotResolveIsNotHandedOut) {
     picks += out.pick() >= 0;
     for (const PipeEstimate& e : out.estimates) {
       ++found;
-      EXPECT_TRUE(e.ambiguous) << "image " << image;
+      EXPECT_TRUE(e.ambiguous_why & kAmbiguousTwinUnresolved) << "image " << image;  // ambiguous, and why
     }
     const LocateOutput& out_b = b.locate_to_pick(s.depth_mm, s.camera);
     if (const int k = out_b.pick(); k >= 0) {

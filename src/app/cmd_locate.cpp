@@ -51,7 +51,7 @@ Json estimate_json(const PipeEstimate& e, int rank, bool pick) {
             {"R", rotation_rowmajor(e.model_to_cam)},
             {"t_mm", translation_mm(e.model_to_cam)},
             {"pickable", e.pickable},
-            {"ambiguous", e.ambiguous},
+            {"ambiguous", e.ambiguous()},
             {"ridge_residual_mm", e.ridge_cost_mm},
             {"ridge_points", e.ridge_points},
             {"refine_inliers", e.refine_inliers},

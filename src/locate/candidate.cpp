@@ -388,13 +388,12 @@ Decision decide(const Evidence& given, const LocateConfig& cfg) {
   // ... and one further from the camera than where one pixel covers its near twin's spread
   // everywhere: no pixel can tell the two apart (twin_beyond_resolution_ambiguous).
   ambiguous_if(e.twin_unresolved, kAmbiguousTwinUnresolved);
-  out.ambiguous = out.ambiguous_why != 0;
   // An ambiguous pose further out of the view than any pose may be picked is not placed by the
   // image: neither its part out of the view nor its rival's is checked. It is no estimate (the
   // zoo's 16-arc, its arcs reaching out of the view: 10 of its 13 false estimates).
   const double most_out_of_view =
       std::max(cfg.verify_max_outside_view, cfg.verify_max_outside_view_well_seen);
-  if (out.ambiguous && e.best.outside_view > float(most_out_of_view)) {
+  if (out.ambiguous() && e.best.outside_view > float(most_out_of_view)) {
     out.outcome = CandidateOutcome::not_confirmed;
     return out;
   }
@@ -402,7 +401,7 @@ Decision decide(const Evidence& given, const LocateConfig& cfg) {
   // the view is not confirmed. A pose checked on all of the pipe goes before one reaching out of
   // the view that agrees as well where it is seen (its part out of view may lie elsewhere).
   out.score = e.best.agreement() * (1.0f - e.best.occluded()) * (1.0f - e.best.outside_view) *
-              (out.ambiguous ? kAmbiguousScoreFactor : 1.0f);
+              (out.ambiguous() ? kAmbiguousScoreFactor : 1.0f);
   // A pose is handed out only where the image could check it: at most verify_max_occluded of it
   // under something in front, at most verify_max_outside_view of it out of the view, and what
   // the image confirms is still verify_min_agreement of the whole pipe, the part out of the view
@@ -509,7 +508,7 @@ Decision decide(const Evidence& given, const LocateConfig& cfg) {
   // relief alone is.
   const bool covered = e.best.occluded() > float(cfg.verify_max_occluded);
   const bool second_unsure = e.searched_again && !second_search_placed;
-  out.withheld = (out.ambiguous ? kWithheldAmbiguous : 0u) | (covered ? kWithheldCovered : 0u) |
+  out.withheld = (out.ambiguous() ? kWithheldAmbiguous : 0u) | (covered ? kWithheldCovered : 0u) |
                  (checked_in_view ? 0u : kWithheldPartSeen) | (ends_go_on ? kWithheldGoesOn : 0u) |
                  (unplaced_in_view ? kWithheldNoEnd : 0u) | (second_unsure ? kWithheldSecondSearch : 0u) |
                  (resolved ? 0u : kWithheldUnresolved);
@@ -1174,7 +1173,6 @@ bool work_candidate(const CandidateContext& ctx, const CandidateInput& in, const
   trace->outcome = decision.outcome;
   if (decision.outcome != CandidateOutcome::accepted) return false;
   *estimate = taken;
-  estimate->ambiguous = decision.ambiguous;
   estimate->ambiguous_why = decision.ambiguous_why;
   estimate->score = decision.score;
   estimate->pickable = decision.pickable;

@@ -129,8 +129,8 @@ struct PipeEstimate {
   int refine_points = 0;  // observed points the refinement used (the region's, or those the pose explains)
   float refine_rms_mm = 0;
   Verification check;
-  bool ambiguous = false;  // another pose of the model fits about as well (torus-like pipes)
-  unsigned ambiguous_why = 0;  // ... why (Ambiguity bits; 0 where it is not ambiguous)
+  unsigned ambiguous_why = 0;  // why another pose of the model fits about as well (Ambiguity bits)
+  bool ambiguous() const { return ambiguous_why != 0; }
   bool pickable = false;   // accepted, not lying under another pipe, not ambiguous, its tube resolved
   int candidate = -1;      // index of its candidate region
   bool searched_again = false;  // found by its region's second search: picked only if no other is
@@ -220,8 +220,8 @@ struct Evidence {
 struct Decision {
   bool decided = false;  // false: the evidence so far passes every check it can answer
   CandidateOutcome outcome = CandidateOutcome::budget;
-  bool ambiguous = false;
-  unsigned ambiguous_why = 0;  // why it is ambiguous (Ambiguity bits)
+  unsigned ambiguous_why = 0;  // why it is ambiguous (Ambiguity bits; 0 where it is not)
+  bool ambiguous() const { return ambiguous_why != 0; }
   bool pickable = false;
   float score = 0;
   bool rival_taken = false;  // the rival, not the best, is the pipe (its ends shown where they are)

@@ -393,8 +393,7 @@ void Locator::mark_pipes_read_two_ways() {
       }
       if (!read_two_ways(lm_, es[i], es[j], cfg_)) continue;
       for (PipeEstimate* e : {&es[i], &es[j]}) {
-        if (!e->ambiguous) e->score *= kAmbiguousScoreFactor;
-        e->ambiguous = true;
+        if (!e->ambiguous()) e->score *= kAmbiguousScoreFactor;
         e->ambiguous_why |= kAmbiguousReadTwoWays;
         e->pickable = e->unresolved = false;
         e->withheld |= kWithheldAmbiguous;
