@@ -952,6 +952,12 @@ TEST(Service, TimingLogHasALinePerCycleAndSummaries) {
                               "tried", "unresolved", "status", "score", "budget_use"})
         EXPECT_TRUE(j.contains(key)) << key;
       for (int k = 0; k < kWithheldKinds; ++k) EXPECT_TRUE(j["withheld"].contains(withheld_name(k))) << k;
+      // ... and of those ambiguous, why: each reason counted, none for more poses than are ambiguous.
+      for (int k = 0; k < kAmbiguityKinds; ++k) {
+        EXPECT_GE(j["ambiguous_why"][ambiguity_name(k)].get<int>(), 0) << k;
+        EXPECT_LE(j["ambiguous_why"][ambiguity_name(k)].get<int>(), j["withheld"]["ambiguous"].get<int>())
+            << k;
+      }
       EXPECT_GE(j["again_ms"].get<double>(), 0.0);
       if (j["cmd"] == 1) {
         EXPECT_GT(j["frame_age_ms"].get<double>(), 0.0);

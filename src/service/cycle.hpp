@@ -29,6 +29,8 @@ struct CycleRecord {
   int unresolved = 0;  // estimates pickable but for the tube's relief against the noise
   // Estimates not pickable, by the checks they fail (Withheld's bits; one may fail several).
   std::array<int, kWithheldKinds> withheld{};
+  // ... of those ambiguous, why (Ambiguity's bits; one may have several reasons).
+  std::array<int, kAmbiguityKinds> ambiguous_why{};
   float score = 0;                              // of the pose presented
   // The pose presented (DONE_OK only): its rank, and what the PLC reads in the registers.
   int index = -1;

@@ -146,14 +146,16 @@ TimingLog::Summary TimingLog::summary() const {
 }
 
 namespace {
-// "ambiguous":n,... for every Withheld bit, in its order, into a fixed buffer (no allocation per cycle).
-struct WithheldText {
+// "name":n,... for every bit of Withheld ("ambiguous":n,...) or of Ambiguity ("rival":n,...), in its
+// order, into a fixed buffer (no allocation per cycle).
+struct CountsText {
   char text[256] = "";
-  explicit WithheldText(const CycleRecord& r) {
+  template <std::size_t N>
+  CountsText(const std::array<int, N>& counts, const char* (*name)(int)) {
     int at = 0;
-    for (int k = 0; k < kWithheldKinds && at < int(sizeof text); ++k)
-      at += std::snprintf(text + at, sizeof text - std::size_t(at), "%s\"%s\":%d", k ? "," : "",
-                          withheld_name(k), r.withheld[std::size_t(k)]);
+    for (int k = 0; k < int(N) && at < int(sizeof text); ++k)
+      at += std::snprintf(text + at, sizeof text - std::size_t(at), "%s\"%s\":%d", k ? "," : "", name(k),
+                          counts[std::size_t(k)]);
   }
 };
 // The pose presented, as the PLC reads it: {"x_mm":..,...,"rz_deg":..}, or null.
@@ -182,7 +184,7 @@ void TimingLog::write(const CycleRecord& r) {
       "\"budget_exhausted\":%s,"
       "\"candidates\":%d,\"tried\":%d,\"accepted\":%d,\"count\":%d,\"unresolved\":%d,\"score\":%.4f,"
       "\"index\":%d,\"pose\":%s,\"last_pick_took_nothing\":%s,\"status\":\"%s\",\"error\":\"%s\","
-      "\"withheld\":{%s}}\n",
+      "\"withheld\":{%s},\"ambiguous_why\":{%s}}\n",
       (unsigned long long)r.cycle, unsigned(r.command), unsigned(r.req_id), r.trigger_unix_ms,
       (unsigned long long)r.frame_sequence, r.queued_ms, grab_status_name(r.grab), r.frame_check, r.grab_ms,
       r.frame_age_ms, t.zbuffer_ms, t.normals_ms, t.regions_ms, t.axis_ms, t.ridge_icp_ms, t.refine_ms,
@@ -190,7 +192,8 @@ void TimingLog::write(const CycleRecord& r) {
       r.budget_ms > 0 ? r.cycle_ms / r.budget_ms : 0.0, r.budget_exhausted ? "true" : "false", r.candidates,
       r.tried, r.accepted, r.count, r.unresolved, double(r.score), r.index, PoseText(r).text,
       r.last_pick_took_nothing ? "true" : "false", status_name(r.status),
-      r.cut_by_shutdown ? "shutdown" : error_name(r.error), WithheldText(r).text);
+      r.cut_by_shutdown ? "shutdown" : error_name(r.error), CountsText(r.withheld, withheld_name).text,
+      CountsText(r.ambiguous_why, ambiguity_name).text);
   put(line_, n);
   if (r.command != std::uint16_t(reg::Command::locate)) return;
   window_.push_back(r.cycle_ms);

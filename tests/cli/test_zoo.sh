@@ -30,6 +30,10 @@ for r in z["rows"]:
     assert set(c["stop_withheld"]) <= {"ambiguous", "covered", "part_seen", "goes_on", "no_end", "second_search",
                                        "noisy", "took_nothing"} and all(n >= 0 for n in c["stop_withheld"].values()), c
     assert c["stop_found"] >= 0 and all(n <= c["stop_found"] for n in c["stop_withheld"].values()), c
+    # ... and of those ambiguous, why: no reason for more poses than are ambiguous.
+    assert set(c["stop_ambiguous_why"]) <= {"twin_unresolved", "rival", "slides", "roll", "other_part",
+                                            "read_two_ways"}, c
+    assert all(0 <= n <= c["stop_withheld"].get("ambiguous", 0) for n in c["stop_ambiguous_why"].values()), c
     # A wrong pick takes nothing on the sim source: the service saw each, and no right pick as one.
     assert c["took_nothing"] == c["wrong"], c
 PY
