@@ -44,6 +44,14 @@ Json verification_json(const Verification& v) {
           {"ends_out_of_view", v.ends_out_of_view}};
 }
 
+// The names of the bits set of the first `kinds` (Withheld's or Ambiguity's), in their order.
+Json bit_names(unsigned bits, int kinds, const char* (*name)(int)) {
+  Json names = Json::array();
+  for (int k = 0; k < kinds; ++k)
+    if (bits & (1u << k)) names.push_back(name(k));
+  return names;
+}
+
 Json estimate_json(const PipeEstimate& e, int rank, bool pick) {
   Json j = {{"rank", rank},
             {"pick", pick},
@@ -60,14 +68,8 @@ Json estimate_json(const PipeEstimate& e, int rank, bool pick) {
             {"model_px", e.check.model_px},
             {"relief_sigmas", e.relief_sigmas},
             {"unresolved", e.unresolved}};
-  Json withheld = Json::array();  // why it is not handed out (empty where it is pickable)
-  for (int k = 0; k < kWithheldKinds; ++k)
-    if (e.withheld & (1u << k)) withheld.push_back(withheld_name(k));
-  j["withheld"] = withheld;
-  Json ambiguous_why = Json::array();  // why it is ambiguous (empty where it is not)
-  for (int k = 0; k < kAmbiguityKinds; ++k)
-    if (e.ambiguous_why & (1u << k)) ambiguous_why.push_back(ambiguity_name(k));
-  j["ambiguous_why"] = ambiguous_why;
+  j["withheld"] = bit_names(e.withheld, kWithheldKinds, withheld_name);  // empty where it is pickable
+  j["ambiguous_why"] = bit_names(e.ambiguous_why, kAmbiguityKinds, ambiguity_name);  // empty where not
   j.update(verification_json(e.check));
   return j;
 }

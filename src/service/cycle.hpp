@@ -12,6 +12,12 @@
 
 namespace pipeloc {
 
+// Adds 1 to counts[k] for each of its bits k set (Withheld's or Ambiguity's).
+template <std::size_t N>
+void count_bits(unsigned bits, std::array<int, N>* counts) {
+  for (std::size_t k = 0; k < N; ++k) (*counts)[k] += int((bits >> k) & 1u);
+}
+
 struct CycleRecord {
   std::uint64_t cycle = 0;  // LOCATE cycles so far (this one included)
   std::uint16_t command = 0, req_id = 0;

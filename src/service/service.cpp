@@ -178,9 +178,8 @@ void Service::locate(Clock::time_point trigger) {
     for (const CandidateTrace& t : out.traces) record_.tried += t.outcome != CandidateOutcome::budget;
     record_.accepted = int(out.estimates.size());
     for (const PipeEstimate& e : out.estimates) {
-      for (int k = 0; k < kWithheldKinds; ++k) record_.withheld[std::size_t(k)] += (e.withheld >> k) & 1u;
-      for (int k = 0; k < kAmbiguityKinds; ++k)
-        record_.ambiguous_why[std::size_t(k)] += (e.ambiguous_why >> k) & 1u;
+      count_bits(e.withheld, &record_.withheld);
+      count_bits(e.ambiguous_why, &record_.ambiguous_why);
     }
     record_.cut_by_shutdown = out.budget_exhausted && cancel_ && cancel_->load();
     record_.budget_exhausted = out.budget_exhausted && !record_.cut_by_shutdown;
