@@ -699,8 +699,9 @@ TEST(Decide, APipeShowingBothEndsEndingMayReachFurtherOutOfTheView) {
 }
 
 // A pose is handed out only where the sensor resolves the tube: its relief (0.223 R, RMS) over the
-// pixels confirming it, against the frame's measured noise, at least pick_min_relief_sigmas. 38
-// pixels of a 20 mm tube: 6.9 sigmas at 2 mm of noise, 2.7 at 5 mm.
+// pixels confirming it, against the frame's measured noise, at least pick_min_relief_sigmas (a
+// bent pipe pick_min_relief_sigmas_bent). 38 pixels of a 20 mm tube: 6.9 sigmas at 2 mm of noise,
+// 2.7 at 5 mm.
 TEST(Decide, APoseIsHandedOutOnlyWhereTheSensorResolvesTheTube) {
   Verification small;
   small.model_px = small.inner_px = 40;
@@ -724,6 +725,15 @@ TEST(Decide, APoseIsHandedOutOnlyWhereTheSensorResolvesTheTube) {
   d = decide(judged(covered), cfg);
   EXPECT_FALSE(d.pickable);
   EXPECT_FALSE(d.unresolved);
+  // 3.4 sigmas (4 mm of noise): too little for a bend (pick_min_relief_sigmas_bent), whose turn
+  // about its length the relief places too; thin short bends picked over 10 mm off while clearing
+  // showed 3.3-3.7. A straight tube's turn about its axis is the same pick: it is handed out.
+  cfg.frame_noise_mm = 4;
+  EXPECT_NEAR(tube_relief_sigmas(small, kD, 4), 3.44f, 0.01f);
+  EXPECT_TRUE(decide(judged(small), cfg).unresolved);
+  Evidence straight = judged(small);
+  straight.model_slides = straight.model_straight = true;
+  EXPECT_TRUE(decide(straight, cfg).pickable);
   cfg.frame_noise_mm = 0;  // no noise known: nothing to hold the pose back for
   EXPECT_TRUE(decide(judged(small), cfg).pickable);
   cfg.frame_noise_mm = 5;

@@ -803,7 +803,8 @@ TEST(Locator, AThinElbowTheSensorDoesNotResolveIsNotHandedOut) {
     for (const PipeEstimate& e : out.estimates) {
       unresolved += e.unresolved;
       if (e.unresolved) {
-        EXPECT_LT(e.relief_sigmas, by_default.pick_min_relief_sigmas) << "image " << image;
+        EXPECT_LT(e.relief_sigmas, by_default.min_relief_sigmas(/*straight_tube=*/false))
+            << "image " << image;
       }
     }
     picks_unchecked += b.locate_to_pick(s.depth_mm, s.camera).pick() >= 0;

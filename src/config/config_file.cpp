@@ -253,6 +253,7 @@ void read_locate(Section& s, LocateConfig* c) {
   s.real("side_drop_of_d", &c->side_drop_of_d, 0, 5, "x D");
   s.real("verify_max_side_level", &c->verify_max_side_level, 0, 1, "share (1: off)");
   s.real("pick_min_relief_sigmas", &c->pick_min_relief_sigmas, 0, 100, "sigmas of the noise (0: off)");
+  s.real("pick_min_relief_sigmas_bent", &c->pick_min_relief_sigmas_bent, 0, 100, "sigmas of the noise");
   s.real("ambiguity_pose_mm", &c->ambiguity_pose_mm, 0, 1000, "mm");
   s.real("ambiguity_quality_margin", &c->ambiguity_quality_margin, 0, 1, "share");
   s.boolean("tell_rivals_apart", &c->tell_rivals_apart);

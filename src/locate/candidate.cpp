@@ -501,9 +501,11 @@ Decision decide(const Evidence& given, const LocateConfig& cfg) {
   // ... and only where the sensor resolves the tube (pick_min_relief_sigmas): a thin short elbow a
   // metre under an active-stereo sensor, its tube 1.3 sigmas of the noise in radius, agrees 0.9 at
   // poses 5-27 mm off (13 picks, 1 right; docs/experiments.md).
+  // A pipe that is not a straight tube needs more (pick_min_relief_sigmas_bent): its turn about its
+  // length is read from the relief too; thin short bends at 3.3-3.7 sigmas were picked 10 mm and more
+  // off while clearing, thin straight tubes right.
   out.relief_sigmas = tube_relief_sigmas(e.best, e.tube_d_mm, float(cfg.frame_noise_mm));
-  const bool resolved =
-      !(cfg.pick_min_relief_sigmas > 0) || out.relief_sigmas >= float(cfg.pick_min_relief_sigmas);
+  const bool resolved = out.relief_sigmas >= float(cfg.min_relief_sigmas(e.model_straight));
   // Each check that holds the pose back is a bit: pickable where none is set; unresolved where the
   // relief alone is.
   const bool covered = e.best.occluded() > float(cfg.verify_max_occluded);

@@ -3,6 +3,8 @@
 // model; noise-dependent values follow the sensor model of DESIGN.md.
 #pragma once
 
+#include <algorithm>
+
 namespace pipeloc {
 
 // The bin interior in the bin frame (pipeloc calibrate-bin prints it): depth points outside it
@@ -166,9 +168,14 @@ struct LocateConfig {
   // Beyond the paper: a pose is handed out only where the sensor resolves the tube: its relief (a
   // tube's top departs from the plane through it by 0.223 R, RMS over its width), summed over the
   // pixels confirming the pose, is at least this many sigmas of the frame's measured noise. A thin
-  // short elbow at 1 m under an active-stereo sensor is not (1.4-1.9 sigmas: 13 picks, 1 right); the
-  // zoo's right picks show 5.4 sigma and more (docs/experiments.md). 0: off.
+  // short elbow at 1 m under an active-stereo sensor is not (1.4-1.9 sigmas: 13 picks, 1 right).
+  // 0: off.
   double pick_min_relief_sigmas = 3;
+  // ... and at least this many for a pipe that is not a straight tube: its turn about its own
+  // length is read from that relief too (a straight tube's is the same pick). Of the nineteen wrong
+  // picks of twelve bins of every zoo shape, six were thin short bends at 3.3-3.7 sigmas; thin
+  // straight tubes were picked right there (docs/experiments.md).
+  double pick_min_relief_sigmas_bent = 4;
   int verify_hypotheses = 3;               // distinct ridge fits refined and checked per region
   double ambiguity_pose_mm = 10;           // two fits further apart than this (MSSD) ...
   double ambiguity_quality_margin = 0.05;  // ... both confirmed within this margin (or within two
@@ -236,6 +243,12 @@ struct LocateConfig {
   int max_results = 0;  // poses reported per image; 0: every pose found (at most max_candidates)
   int threads = 2;
   int result_cap() const { return max_results > 0 ? max_results : max_candidates; }
+  // The relief a pose of the pipe needs to be handed out (pick_min_relief_sigmas; 0: none).
+  double min_relief_sigmas(bool straight_tube) const {
+    if (!(pick_min_relief_sigmas > 0)) return 0;
+    return straight_tube ? pick_min_relief_sigmas
+                         : std::max(pick_min_relief_sigmas, pick_min_relief_sigmas_bent);
+  }
 };
 
 // The paper's search (IV-B): its six turns in both directions at the measured centre, every one
