@@ -500,10 +500,9 @@ Decision decide(const Evidence& given, const LocateConfig& cfg) {
                                     e.best.side_px >= kMinSidePx;
   // ... and only where the sensor resolves the tube (pick_min_relief_sigmas): a thin short elbow a
   // metre under an active-stereo sensor, its tube 1.3 sigmas of the noise in radius, agrees 0.9 at
-  // poses 5-27 mm off (13 picks, 1 right; docs/experiments.md).
-  // A pipe that is not a straight tube needs more (pick_min_relief_sigmas_bent): its turn about its
-  // length is read from the relief too; thin short bends at 3.3-3.7 sigmas were picked 10 mm and more
-  // off while clearing, thin straight tubes right.
+  // poses 5-27 mm off (13 picks, 1 right); a pipe that is not a straight tube needs more
+  // (pick_min_relief_sigmas_bent): thin short bends at 3.3-3.7 sigmas were picked 10 mm and more
+  // off while clearing, thin straight tubes right (docs/experiments.md).
   out.relief_sigmas = tube_relief_sigmas(e.best, e.tube_d_mm, float(cfg.frame_noise_mm));
   const bool resolved = out.relief_sigmas >= float(cfg.min_relief_sigmas(e.model_straight));
   // Each check that holds the pose back is a bit: pickable where none is set; unresolved where the

@@ -3,8 +3,6 @@
 // model; noise-dependent values follow the sensor model of DESIGN.md.
 #pragma once
 
-#include <algorithm>
-
 namespace pipeloc {
 
 // The bin interior in the bin frame (pipeloc calibrate-bin prints it): depth points outside it
@@ -243,11 +241,17 @@ struct LocateConfig {
   int max_results = 0;  // poses reported per image; 0: every pose found (at most max_candidates)
   int threads = 2;
   int result_cap() const { return max_results > 0 ? max_results : max_candidates; }
-  // The relief a pose of the pipe needs to be handed out (pick_min_relief_sigmas; 0: none).
+  // The relief a pose of the pipe needs to be handed out (pick_min_relief_sigmas; 0: none), and
+  // the key that sets it (for the log).
+  bool bent_bound_applies(bool straight_tube) const {
+    return !straight_tube && pick_min_relief_sigmas_bent > pick_min_relief_sigmas;
+  }
   double min_relief_sigmas(bool straight_tube) const {
     if (!(pick_min_relief_sigmas > 0)) return 0;
-    return straight_tube ? pick_min_relief_sigmas
-                         : std::max(pick_min_relief_sigmas, pick_min_relief_sigmas_bent);
+    return bent_bound_applies(straight_tube) ? pick_min_relief_sigmas_bent : pick_min_relief_sigmas;
+  }
+  const char* min_relief_key(bool straight_tube) const {
+    return bent_bound_applies(straight_tube) ? "pick_min_relief_sigmas_bent" : "pick_min_relief_sigmas";
   }
 };
 

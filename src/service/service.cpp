@@ -254,8 +254,8 @@ void Service::warn_unresolved() {
       "LOCATEs since the last pick)",
       cycles_, u.depth_mm, locator_.locator_model().tube_d_mm, u.relief_sigmas, u.noise_mm,
       u.noise_measured ? "measured" : "assumed: too few readings to measure",
-      straight ? "pick_min_relief_sigmas" : "pick_min_relief_sigmas_bent",
-      locator_.config().min_relief_sigmas(straight), unresolved_cycles_);
+      locator_.config().min_relief_key(straight), locator_.config().min_relief_sigmas(straight),
+      unresolved_cycles_);
 }
 
 // The integrator's picture of the last LOCATE: drawn once when the log, the status page or the
