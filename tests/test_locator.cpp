@@ -803,7 +803,7 @@ TEST(Locator, AThinElbowTheSensorDoesNotResolveIsNotHandedOut) {
     for (const PipeEstimate& e : out.estimates) {
       unresolved += e.unresolved;
       if (e.unresolved) {
-        EXPECT_LT(e.relief_sigmas, by_default.min_relief_sigmas(/*straight_tube=*/false))
+        EXPECT_LT(e.relief_sigmas, by_default.min_relief(/*straight_tube=*/false).sigmas)
             << "image " << image;
       }
     }

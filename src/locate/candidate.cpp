@@ -504,7 +504,7 @@ Decision decide(const Evidence& given, const LocateConfig& cfg) {
   // (pick_min_relief_sigmas_bent): thin short bends at 3.3-3.7 sigmas were picked 10 mm and more
   // off while clearing, thin straight tubes right (docs/experiments.md).
   out.relief_sigmas = tube_relief_sigmas(e.best, e.tube_d_mm, float(cfg.frame_noise_mm));
-  const bool resolved = out.relief_sigmas >= float(cfg.min_relief_sigmas(e.model_straight));
+  const bool resolved = out.relief_sigmas >= float(cfg.min_relief(e.model_straight).sigmas);
   // Each check that holds the pose back is a bit: pickable where none is set; unresolved where the
   // relief alone is.
   const bool covered = e.best.occluded() > float(cfg.verify_max_occluded);
@@ -1121,7 +1121,7 @@ bool work_candidate(const CandidateContext& ctx, const CandidateInput& in, const
   evidence.tube_d_mm = ctx.lm.tube_d_mm;
   evidence.extent_l_mm = ctx.lm.extent_l_mm;
   evidence.model_slides = !ctx.lm.slides.empty();
-  evidence.model_straight = evidence.model_slides && ctx.lm.straight;
+  evidence.model_straight = ctx.lm.slides_as_straight_tube();
   evidence.ends_must_pin = ctx.cfg.pin_slides_by_ends && evidence.model_slides;
   evidence.short_region = in.region->short_region;
   evidence.searched_again = in.searched_again;

@@ -241,17 +241,18 @@ struct LocateConfig {
   int max_results = 0;  // poses reported per image; 0: every pose found (at most max_candidates)
   int threads = 2;
   int result_cap() const { return max_results > 0 ? max_results : max_candidates; }
-  // The relief a pose of the pipe needs to be handed out (pick_min_relief_sigmas; 0: none), and
-  // the key that sets it (for the log).
-  bool bent_bound_applies(bool straight_tube) const {
-    return !straight_tube && pick_min_relief_sigmas_bent > pick_min_relief_sigmas;
-  }
-  double min_relief_sigmas(bool straight_tube) const {
-    if (!(pick_min_relief_sigmas > 0)) return 0;
-    return bent_bound_applies(straight_tube) ? pick_min_relief_sigmas_bent : pick_min_relief_sigmas;
-  }
-  const char* min_relief_key(bool straight_tube) const {
-    return bent_bound_applies(straight_tube) ? "pick_min_relief_sigmas_bent" : "pick_min_relief_sigmas";
+  // The relief a pose of the pipe needs to be handed out (0: none), and the key that sets it (for
+  // the log): pick_min_relief_sigmas_bent for a pipe that is not a straight tube where it asks
+  // more, else pick_min_relief_sigmas, which at 0 turns both off.
+  struct ReliefBound {
+    double sigmas;
+    const char* key;
+  };
+  ReliefBound min_relief(bool straight_tube) const {
+    if (!(pick_min_relief_sigmas > 0)) return {0, "pick_min_relief_sigmas"};
+    if (!straight_tube && pick_min_relief_sigmas_bent > pick_min_relief_sigmas)
+      return {pick_min_relief_sigmas_bent, "pick_min_relief_sigmas_bent"};
+    return {pick_min_relief_sigmas, "pick_min_relief_sigmas"};
   }
 };
 

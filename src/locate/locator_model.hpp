@@ -34,6 +34,9 @@ struct LocatorModel {
   // A straight tube (its centreline within D/10 of a line): turned about its own axis it is the
   // same, and the ridge ICP leaves that turn out (locate/rigid_fit.hpp).
   bool straight = false;
+  // ... that slides along itself (slides not empty): what decide() takes for a straight tube
+  // (Evidence::model_straight), and the service's log with it.
+  bool slides_as_straight_tube() const { return straight && !slides.empty(); }
   // The mesh verification renders: vertices merged on a grid of D/8 (within a pixel's footprint at
   // the bin's depth, several times fewer triangles to draw per hypothesis).
   Mesh verify_mesh;

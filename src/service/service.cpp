@@ -246,15 +246,15 @@ void Service::warn_unresolved() {
   const Unresolved u = unresolved_;
   unresolved_ = Unresolved{};  // once per LOCATE (a NEXT after it publishes too)
   if (unresolved_cycles_++ % 100 != 0) return;
-  const bool straight = locator_.locator_model().straight;
+  const LocateConfig::ReliefBound bound =
+      locator_.config().min_relief(locator_.locator_model().slides_as_straight_tube());
   spdlog::warn(
       "LOCATE {}: DONE_NONE, though a pipe was found {:.0f} mm from the camera: the sensor does not resolve "
       "its {:.1f} mm tube there (relief {:.1f} sigmas of the depth noise, {:.1f} mm {}; [locate] "
       "{} {:.1f}): mount the camera nearer or use a sensor with less noise ({} such "
       "LOCATEs since the last pick)",
       cycles_, u.depth_mm, locator_.locator_model().tube_d_mm, u.relief_sigmas, u.noise_mm,
-      u.noise_measured ? "measured" : "assumed: too few readings to measure",
-      locator_.config().min_relief_key(straight), locator_.config().min_relief_sigmas(straight),
+      u.noise_measured ? "measured" : "assumed: too few readings to measure", bound.key, bound.sigmas,
       unresolved_cycles_);
 }
 
