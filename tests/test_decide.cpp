@@ -121,6 +121,12 @@ Evidence other_part_unsure(Evidence e) {
   return e;
 }
 
+// ... and so for the rival (which decide() may take in the best's place).
+Evidence rival_other_part_unsure(Evidence e) {
+  e.rival_other_part_unsure = true;
+  return e;
+}
+
 // Found by the second search of its region, on its whole top surface (retry_surface_cell_of_d).
 Evidence searched_again(Evidence e) {
   e.searched_again = true;
@@ -496,6 +502,17 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
       {"rival as good, the tube goes on beyond the best's end",
        ends_read(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), 1, 1, 1, 0), true,
        CandidateOutcome::accepted, false, true, 0.88f, true},
+      // ... and is judged for another part of the pipe in view as the best is: a Z 42 % out of the
+      // view, another stretch of it laid over its part in view, was taken as the rival, 353 mm off.
+      {"rival taken, another part of it as well in view",
+       rival_other_part_unsure(ends_read(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), 0, 0, 1, 0)), true,
+       CandidateOutcome::accepted, true, false, 0.44f, true},
+      {"rival taken, another part of the best as well in view",
+       other_part_unsure(ends_read(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), 0, 0, 1, 0)), true,
+       CandidateOutcome::accepted, false, true, 0.88f, true},
+      {"best kept, another part of its rival as well in view",
+       rival_other_part_unsure(ends_read(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), 2, 0, 1, 1)),
+       true, CandidateOutcome::accepted, false, true, 0.9f},
       {"rival as good, the image pins its end and not the best's, within reach of them",
        ends_within_reach(ends_read(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), 0, 0, 1, 0)), true,
        CandidateOutcome::accepted, true, false, 0.45f},

@@ -136,6 +136,7 @@ bool pixels_show(int for_a, int for_b) { return for_a >= kMinTellingPx && kTelli
 Evidence rival_first(Evidence e) {
   std::swap(e.best, e.second);
   std::swap(e.told.for_a, e.told.for_b);
+  std::swap(e.other_part_unsure, e.rival_other_part_unsure);
   return e;
 }
 
@@ -1078,23 +1079,31 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
   // rest in the view where the sensor read nothing (tools/zoo --seed 22, 11-S-asym). Only where
   // no end is pinned: a U with both legs out of the view, its bend in view, or an arc, reads the
   // same with another part there, and right picks were lost (docs/experiments.md). Judged on the
-  // best as it stands here (slid, polished); the slides and the twins are judged above.
-  if (cfg.judge_other_parts && have_best && best.check.outside_view > 0 && best.check.ends_pinned == 0 &&
-      best.check.ends_continued == 0 && !deadline.passed()) {
-    const PipeEstimate found = best;
+  // best as it stands here (slid, polished), and on a rival as good, which decide() may hand out
+  // in its place: 42 % of a 934 mm Z out of the view, another stretch of it laid over its part in
+  // view, was taken as the rival, never judged, 353 mm off (tools/zoo --seed 22, 13-Z, clearing).
+  // The slides and the twins are judged above.
+  bool cut_short = false;  // the deadline passed while another part was judged
+  const auto other_part_unsure = [&](const PipeEstimate& found) {
+    if (!(cfg.judge_other_parts && found.check.outside_view > 0 && found.check.ends_pinned == 0 &&
+          found.check.ends_continued == 0 && !deadline.passed()))
+      return false;
     std::array<Pose, kMostOtherParts> motions;
     const int n = other_parts_in_view(lm.centreline_points, lm.centreline_step_mm, lm.tube_d_mm,
                                       std::max(lm.tube_d_mm, float(cfg.ambiguity_pose_mm)),
                                       kOtherPartRmsOfD * lm.tube_d_mm, found.model_to_cam, ctx.camera,
                                       &ctx.view, motions.data(), kMostOtherParts);
-    for (int q = 0; q < n && !out.other_part_unsure; ++q) {
+    for (int q = 0; q < n; ++q) {
       const Pose other = found.model_to_bin * motions[std::size_t(q)].inverse();
       bool known = pick_distance_mm(lm, other, found.model_to_bin, ambiguity_mm) <= ambiguity_mm;
       for (const Pose& half_turn : ctx.model.near_symmetries)  // a twin, judged above
         known = known ||
                 pick_distance_mm(lm, other, found.model_to_bin * half_turn, ambiguity_mm) <= ambiguity_mm;
       if (known) continue;
-      if (deadline.passed()) return out;
+      if (deadline.passed()) {
+        cut_short = true;
+        return false;
+      }
       const PipeEstimate e =
           refine_and_check(other, found.ridge_cost_mm, buf->region_pts.data(), refine_count, true);
       if (pick_distance_mm(lm, e.model_to_bin, found.model_to_bin, ambiguity_mm) <= ambiguity_mm) continue;
@@ -1104,9 +1113,14 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
         const TellingPixels told = telling_pixels(found, e);
         if (pixels_show(told.for_a, told.for_b)) continue;  // the image shows the best, not the other
       }
-      out.other_part_unsure = true;
+      return true;
     }
-  }
+    return false;
+  };
+  out.other_part_unsure = have_best && other_part_unsure(best);
+  out.rival_other_part_unsure =
+      have_best && have_second && as_good(second.check, best.check, cfg) && other_part_unsure(second);
+  if (cut_short) return out;
   // Beyond the paper: where the best and a rival about as good differ (a near twin's longer leg,
   // a slid pose's ends), which one the image shows (decide() weighs it with the ends).
   if (cfg.tell_rivals_apart && have_best && have_second && as_good(second.check, best.check, cfg))
@@ -1161,6 +1175,7 @@ bool work_candidate(const CandidateContext& ctx, const CandidateInput& in, const
   evidence.told = judged.told;
   evidence.roll_unsure = judged.roll_unsure;
   evidence.other_part_unsure = judged.other_part_unsure;
+  evidence.rival_other_part_unsure = judged.rival_other_part_unsure;
   evidence.twin_unresolved = ctx.cfg.twin_beyond_resolution_ambiguous &&
                              (judged.best.model_to_cam * ctx.lm.centroid.cast<double>()).z() >
                                  twin_resolved_within_mm(*ctx.lm.model, ctx.camera.fx, kTwinUnresolvedPixels);

@@ -213,6 +213,7 @@ struct Evidence {
   TellingPixels told;                             // ... the pixels where the image tells them apart
   bool roll_unsure = false;                       // ... the turn about its length not told (judge_rolls)
   bool other_part_unsure = false;  // ... another part of the pipe in view as well (judge_other_parts)
+  bool rival_other_part_unsure = false;  // ... and so for the rival (judge_other_parts)
   bool twin_unresolved = false;  // ... further from the camera than it resolves the near twin
   bool rival_ends_apart = true;  // ... their ends lie where judge_ends tells them (ends_tell_apart)
 };
@@ -396,6 +397,8 @@ struct Hypotheses {
   // The best reaches out of the view, and a pose putting another part of the pipe where its part
   // in view is seen is confirmed about as well on the pixels read (judge_other_parts).
   bool other_part_unsure = false;
+  // ... and so for a rival confirmed about as well, which decide() may take in the best's place.
+  bool rival_other_part_unsure = false;
 };
 Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& in,
                             const ObservedRidge& observed, const RidgeFits& fitted, const Deadline& deadline,
