@@ -1117,14 +1117,13 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
     }
     return false;
   };
+  const bool rival_as_good = have_best && have_second && as_good(second.check, best.check, cfg);
   out.other_part_unsure = have_best && other_part_unsure(best);
-  out.rival_other_part_unsure =
-      have_best && have_second && as_good(second.check, best.check, cfg) && other_part_unsure(second);
+  out.rival_other_part_unsure = rival_as_good && other_part_unsure(second);
   if (cut_short) return out;
   // Beyond the paper: where the best and a rival about as good differ (a near twin's longer leg,
   // a slid pose's ends), which one the image shows (decide() weighs it with the ends).
-  if (cfg.tell_rivals_apart && have_best && have_second && as_good(second.check, best.check, cfg))
-    out.told = telling_pixels(best, second);
+  if (cfg.tell_rivals_apart && rival_as_good) out.told = telling_pixels(best, second);
   out.complete = true;
   return out;
 }
