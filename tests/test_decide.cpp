@@ -502,17 +502,6 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
       {"rival as good, the tube goes on beyond the best's end",
        ends_read(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), 1, 1, 1, 0), true,
        CandidateOutcome::accepted, false, true, 0.88f, true},
-      // ... and is judged for another part of the pipe in view as the best is: a Z 42 % out of the
-      // view, another stretch of it laid over its part in view, was taken as the rival, 353 mm off.
-      {"rival taken, another part of it as well in view",
-       rival_other_part_unsure(ends_read(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), 0, 0, 1, 0)), true,
-       CandidateOutcome::accepted, true, false, 0.44f, true},
-      {"rival taken, another part of the best as well in view",
-       other_part_unsure(ends_read(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), 0, 0, 1, 0)), true,
-       CandidateOutcome::accepted, false, true, 0.88f, true},
-      {"best kept, another part of its rival as well in view",
-       rival_other_part_unsure(ends_read(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), 2, 0, 1, 1)),
-       true, CandidateOutcome::accepted, false, true, 0.9f},
       {"rival as good, the image pins its end and not the best's, within reach of them",
        ends_within_reach(ends_read(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), 0, 0, 1, 0)), true,
        CandidateOutcome::accepted, true, false, 0.45f},
@@ -610,6 +599,30 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
     EXPECT_NEAR(d.score, row.score, 1e-5f);
     EXPECT_EQ(d.rival_taken, row.rival_taken);
   }
+}
+
+// A rival taken in the best's place (its end pinned, the best's not) is judged for another part
+// of the pipe in view as the best is, by its own judgement: a Z 42 % out of the view, another
+// stretch of it laid over its part in view, was taken as the rival, 353 mm off (judge_other_parts).
+TEST(Decide, ARivalTakenIsJudgedForAnotherPartByItsOwnJudgement) {
+  const LocateConfig cfg;
+  const Evidence rival_pinned = ends_read(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), 0, 0, 1, 0);
+  Decision d = decide(rival_other_part_unsure(rival_pinned), cfg);
+  EXPECT_TRUE(d.rival_taken);
+  EXPECT_EQ(d.ambiguous_why, kAmbiguousOtherPart);
+  EXPECT_FALSE(d.pickable);
+  d = decide(other_part_unsure(rival_pinned), cfg);  // only the best's other part is as good
+  EXPECT_TRUE(d.rival_taken);
+  EXPECT_FALSE(d.ambiguous());
+  EXPECT_TRUE(d.pickable);
+  EXPECT_NEAR(d.score, 0.88f, 1e-5f);
+  // The best kept (its ends pinned, the tube going on beyond the rival's): the rival's judgement
+  // is not the best's.
+  const Evidence best_pinned = ends_read(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), 2, 0, 1, 1);
+  d = decide(rival_other_part_unsure(best_pinned), cfg);
+  EXPECT_FALSE(d.rival_taken);
+  EXPECT_FALSE(d.ambiguous());
+  EXPECT_TRUE(d.pickable);
 }
 
 // An ambiguous pose says why, a reason for each rule that made it so; a pose not ambiguous, none.
