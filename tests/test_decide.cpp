@@ -114,6 +114,12 @@ Evidence turn_unsure(Evidence e) {
   return e;
 }
 
+// ... and so for the rival (which decide() may take in the best's place).
+Evidence rival_turn_unsure(Evidence e) {
+  e.rival_roll_unsure = true;
+  return e;
+}
+
 // The best reaches out of the view, and a pose putting another part of the pipe where its part in
 // view is seen is confirmed about as well on the pixels read (judge_other_parts).
 Evidence other_part_unsure(Evidence e) {
@@ -623,6 +629,31 @@ TEST(Decide, ARivalTakenIsJudgedForAnotherPartByItsOwnJudgement) {
   EXPECT_FALSE(d.rival_taken);
   EXPECT_FALSE(d.ambiguous());
   EXPECT_TRUE(d.pickable);
+}
+
+// ... and so for its turn about its length (judge_rolls): a rival taken is ambiguous where its own
+// turn is not told, not where only the best's is.
+TEST(Decide, ARivalTakenIsJudgedForItsTurnByItsOwnJudgement) {
+  const LocateConfig cfg;
+  const Evidence rival_pinned = ends_read(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), 0, 0, 1, 0);
+  Decision d = decide(rival_turn_unsure(rival_pinned), cfg);
+  EXPECT_TRUE(d.rival_taken);
+  EXPECT_EQ(d.ambiguous_why, kAmbiguousRoll);
+  EXPECT_FALSE(d.pickable);
+  d = decide(turn_unsure(rival_pinned), cfg);  // only the best's turn is not told
+  EXPECT_TRUE(d.rival_taken);
+  EXPECT_FALSE(d.ambiguous());
+  EXPECT_TRUE(d.pickable);
+  EXPECT_NEAR(d.score, 0.88f, 1e-5f);
+  // The best kept: the rival's turn is not the best's.
+  const Evidence best_pinned = ends_read(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), 2, 0, 1, 1);
+  d = decide(rival_turn_unsure(best_pinned), cfg);
+  EXPECT_FALSE(d.rival_taken);
+  EXPECT_FALSE(d.ambiguous());
+  EXPECT_TRUE(d.pickable);
+  d = decide(turn_unsure(best_pinned), cfg);
+  EXPECT_FALSE(d.rival_taken);
+  EXPECT_EQ(d.ambiguous_why, kAmbiguousRoll);
 }
 
 // An ambiguous pose says why, a reason for each rule that made it so; a pose not ambiguous, none.

@@ -136,6 +136,7 @@ bool pixels_show(int for_a, int for_b) { return for_a >= kMinTellingPx && kTelli
 Evidence rival_first(Evidence e) {
   std::swap(e.best, e.second);
   std::swap(e.told.for_a, e.told.for_b);
+  std::swap(e.roll_unsure, e.rival_roll_unsure);
   std::swap(e.other_part_unsure, e.rival_other_part_unsure);
   return e;
 }
@@ -919,7 +920,20 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
   // differ, the pixels show the best and hardly the turn, as they tell a rival (tell_rolls_apart).
   // A coil of 1.25 turns turned half about its length lies nearly where it was: seed 21's 18-coil
   // of the zoo (8.3 mm, 0.48 m under the stereo sensor) had its right poses ambiguous so, its bin
-  // stopped with 14 coils free (docs/experiments.md).
+  // stopped with 14 coils free (docs/experiments.md). A rival as good is judged so too, below.
+  const float roll_mm = float(cfg.roll_ambiguity_mm);
+  // Whether `turn` leaves the turn of `found` not known: confirmed about as well, the pick moved
+  // beyond roll_mm, and not told apart by the pixels.
+  const auto turn_as_good = [&](const PipeEstimate& found, const PipeEstimate& turn) {
+    if (!as_good(turn.check, found.check, cfg) ||
+        !(pick_distance_mm(lm, found.model_to_bin, turn.model_to_bin, roll_mm) > roll_mm))
+      return false;
+    if (cfg.tell_rolls_apart) {
+      const TellingPixels told = telling_pixels(found, turn);
+      if (pixels_show(told.for_a, told.for_b)) return false;  // the image shows the pose, not the turn
+    }
+    return true;
+  };
   if (cfg.judge_rolls && have_best && !lm.rolls.empty()) {
     constexpr std::size_t kTurns = 1 + LocatorModel::kMostRolls;  // the best and its turns
     PipeEstimate turned[kTurns];
@@ -932,17 +946,8 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
       turned[n_turned++] =
           judge(found * lm.rolls[k], found_cost_mm, buf->region_pts.data(), refine_count, Start::turn);
     }
-    const float roll_mm = float(cfg.roll_ambiguity_mm);
-    for (std::size_t k = 0; k < n_turned && !out.roll_unsure; ++k) {
-      if (!as_good(turned[k].check, best.check, cfg) ||
-          !(pick_distance_mm(lm, best.model_to_bin, turned[k].model_to_bin, roll_mm) > roll_mm))
-        continue;
-      if (cfg.tell_rolls_apart) {
-        const TellingPixels told = telling_pixels(best, turned[k]);
-        if (pixels_show(told.for_a, told.for_b)) continue;  // the image shows the best, not the turn
-      }
-      out.roll_unsure = true;
-    }
+    for (std::size_t k = 0; k < n_turned && !out.roll_unsure; ++k)
+      out.roll_unsure = turn_as_good(best, turned[k]);
   }
   if (have_best) {
     const Pose found = best.model_to_bin;  // the best after its twins: slid poses of this one
@@ -1120,6 +1125,19 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
   const bool rival_as_good = have_best && have_second && as_good(second.check, best.check, cfg);
   out.other_part_unsure = have_best && other_part_unsure(best);
   out.rival_other_part_unsure = rival_as_good && other_part_unsure(second);
+  // A rival as good, which decide() may hand out in the best's place, is turned about its length
+  // the same way (each turn refined, not weighed against the best): taken, it kept the best's
+  // judgement before.
+  for (std::size_t k = 0;
+       cfg.judge_rolls && rival_as_good && k < lm.rolls.size() && !out.rival_roll_unsure && !cut_short; ++k) {
+    if (deadline.passed()) {
+      cut_short = true;
+      break;
+    }
+    out.rival_roll_unsure =
+        turn_as_good(second, refine_and_check(second.model_to_bin * lm.rolls[k], second.ridge_cost_mm,
+                                              buf->region_pts.data(), refine_count, false));
+  }
   if (cut_short) return out;
   // Beyond the paper: where the best and a rival about as good differ (a near twin's longer leg,
   // a slid pose's ends), which one the image shows (decide() weighs it with the ends).
@@ -1173,6 +1191,7 @@ bool work_candidate(const CandidateContext& ctx, const CandidateInput& in, const
   evidence.best = judged.best.check, evidence.second = judged.second.check;
   evidence.told = judged.told;
   evidence.roll_unsure = judged.roll_unsure;
+  evidence.rival_roll_unsure = judged.rival_roll_unsure;
   evidence.other_part_unsure = judged.other_part_unsure;
   evidence.rival_other_part_unsure = judged.rival_other_part_unsure;
   evidence.twin_unresolved = ctx.cfg.twin_beyond_resolution_ambiguous &&

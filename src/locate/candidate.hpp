@@ -212,6 +212,7 @@ struct Evidence {
   Verification best, second;                      // ... more than ambiguity_pose_mm from it
   TellingPixels told;                             // ... the pixels where the image tells them apart
   bool roll_unsure = false;                       // ... the turn about its length not told (judge_rolls)
+  bool rival_roll_unsure = false;                 // ... and so for the rival (judge_rolls)
   bool other_part_unsure = false;  // ... another part of the pipe in view as well (judge_other_parts)
   bool rival_other_part_unsure = false;  // ... and so for the rival (judge_other_parts)
   bool twin_unresolved = false;  // ... further from the camera than it resolves the near twin
@@ -394,6 +395,8 @@ struct Hypotheses {
   // A hypothesis turned from another about the pipe's length (judge_rolls) is confirmed about as
   // well as the best and lies more than roll_ambiguity_mm from it.
   bool roll_unsure = false;
+  // ... and so for a rival confirmed about as well, which decide() may take in the best's place.
+  bool rival_roll_unsure = false;
   // The best reaches out of the view, and a pose putting another part of the pipe where its part
   // in view is seen is confirmed about as well on the pixels read (judge_other_parts).
   bool other_part_unsure = false;

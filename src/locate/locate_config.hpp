@@ -186,7 +186,8 @@ struct LocateConfig {
                                            // over the pixels read where nothing lies in front is as good
                                            // (its part under a pipe says nothing)
   bool judge_rolls = true;        // the found pose turned about the pipe's own length by quarter turns
-                                  // (eighths where a quarter turn lands it mostly on itself)
+                                  // (eighths where a quarter turn lands it mostly on itself); and
+                                  // so a rival as good, which may be handed out in its place
   double roll_ambiguity_mm = 5;   // ... a turn the image confirms as well that moves the pick further
                                   // than this (the pick-correct tolerance): ambiguous ...
   bool tell_rolls_apart = true;   // ... unless, where the two differ, the image speaks for the found
