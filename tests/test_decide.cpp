@@ -607,53 +607,42 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
   }
 }
 
-// A rival taken in the best's place (its end pinned, the best's not) is judged for another part
-// of the pipe in view as the best is, by its own judgement: a Z 42 % out of the view, another
-// stretch of it laid over its part in view, was taken as the rival, 353 mm off (judge_other_parts).
-TEST(Decide, ARivalTakenIsJudgedForAnotherPartByItsOwnJudgement) {
+// A rival taken in the best's place (its end pinned, the best's not) is judged as the best is, by
+// its own judgement: ambiguous (`why`) where its own judgement says so (rival_unsure), not where
+// only the best's does (best_unsure); the best kept, by the best's.
+void expect_a_rival_taken_judged_by_its_own(Evidence (*best_unsure)(Evidence),
+                                            Evidence (*rival_unsure)(Evidence), unsigned why) {
   const LocateConfig cfg;
   const Evidence rival_pinned = ends_read(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), 0, 0, 1, 0);
-  Decision d = decide(rival_other_part_unsure(rival_pinned), cfg);
+  Decision d = decide(rival_unsure(rival_pinned), cfg);
   EXPECT_TRUE(d.rival_taken);
-  EXPECT_EQ(d.ambiguous_why, kAmbiguousOtherPart);
+  EXPECT_EQ(d.ambiguous_why, why);
   EXPECT_FALSE(d.pickable);
-  d = decide(other_part_unsure(rival_pinned), cfg);  // only the best's other part is as good
+  d = decide(best_unsure(rival_pinned), cfg);
   EXPECT_TRUE(d.rival_taken);
   EXPECT_FALSE(d.ambiguous());
   EXPECT_TRUE(d.pickable);
   EXPECT_NEAR(d.score, 0.88f, 1e-5f);
-  // The best kept (its ends pinned, the tube going on beyond the rival's): the rival's judgement
-  // is not the best's.
+  // The best kept (its ends pinned, the tube going on beyond the rival's).
   const Evidence best_pinned = ends_read(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), 2, 0, 1, 1);
-  d = decide(rival_other_part_unsure(best_pinned), cfg);
+  d = decide(rival_unsure(best_pinned), cfg);
   EXPECT_FALSE(d.rival_taken);
   EXPECT_FALSE(d.ambiguous());
   EXPECT_TRUE(d.pickable);
+  d = decide(best_unsure(best_pinned), cfg);
+  EXPECT_FALSE(d.rival_taken);
+  EXPECT_EQ(d.ambiguous_why, why);
 }
 
-// ... and so for its turn about its length (judge_rolls): a rival taken is ambiguous where its own
-// turn is not told, not where only the best's is.
+// ... for another part of the pipe in view: a Z 42 % out of the view, another stretch of it laid
+// over its part in view, was taken as the rival, 353 mm off (judge_other_parts).
+TEST(Decide, ARivalTakenIsJudgedForAnotherPartByItsOwnJudgement) {
+  expect_a_rival_taken_judged_by_its_own(other_part_unsure, rival_other_part_unsure, kAmbiguousOtherPart);
+}
+
+// ... and for its turn about its length (judge_rolls).
 TEST(Decide, ARivalTakenIsJudgedForItsTurnByItsOwnJudgement) {
-  const LocateConfig cfg;
-  const Evidence rival_pinned = ends_read(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), 0, 0, 1, 0);
-  Decision d = decide(rival_turn_unsure(rival_pinned), cfg);
-  EXPECT_TRUE(d.rival_taken);
-  EXPECT_EQ(d.ambiguous_why, kAmbiguousRoll);
-  EXPECT_FALSE(d.pickable);
-  d = decide(turn_unsure(rival_pinned), cfg);  // only the best's turn is not told
-  EXPECT_TRUE(d.rival_taken);
-  EXPECT_FALSE(d.ambiguous());
-  EXPECT_TRUE(d.pickable);
-  EXPECT_NEAR(d.score, 0.88f, 1e-5f);
-  // The best kept: the rival's turn is not the best's.
-  const Evidence best_pinned = ends_read(judged_with_rival(seen(900, 0, 0), seen(880, 0, 0)), 2, 0, 1, 1);
-  d = decide(rival_turn_unsure(best_pinned), cfg);
-  EXPECT_FALSE(d.rival_taken);
-  EXPECT_FALSE(d.ambiguous());
-  EXPECT_TRUE(d.pickable);
-  d = decide(turn_unsure(best_pinned), cfg);
-  EXPECT_FALSE(d.rival_taken);
-  EXPECT_EQ(d.ambiguous_why, kAmbiguousRoll);
+  expect_a_rival_taken_judged_by_its_own(turn_unsure, rival_turn_unsure, kAmbiguousRoll);
 }
 
 // An ambiguous pose says why, a reason for each rule that made it so; a pose not ambiguous, none.
