@@ -268,6 +268,49 @@ TEST(PoseDistance, OfTwoReadingsInTheViewTheEndsRefuteTheOneTheyShowWorse) {
   EXPECT_EQ(reading_its_ends_refute(lm, a, twin, cfg), -1);
 }
 
+// Beyond the paper: of one pipe's two readings by two regions, the one the image confirms clearly
+// worse is the one not to pick, whatever its ends show and in or out of the view (an arc read slid
+// round itself, one end shown, beside its right reading withheld as sliding: 14-arc of the zoo);
+// where the image confirms them about as well, the ends judge (above), and two pipes end to end or
+// one pipe's duplicates are no two readings.
+TEST(PoseDistance, OfTwoReadingsOfOnePipeTheOneConfirmedClearlyWorseIsNamed) {
+  LocateConfig cfg;
+  const LocatorModel lm = prepare_locator_model(pipe_of("B120r150", 20, "arc"), 8, cfg);
+  const auto& c = lm.centreline_points;
+  ASSERT_GE(c.size(), 16u);
+  const float d = lm.tube_d_mm;
+  PipeEstimate right;
+  right.model_to_bin.translation() = Eigen::Vector3d(10, 20, 30);
+  right.check.model_px = 1000, right.check.agree_px = 905;
+  right.check.ends_pinned = 1, right.check.ends_continued = 1;
+  // The arc's centre and normal, from three points of its centreline.
+  const Eigen::Vector3d p0 = c.front().cast<double>(), a = c[c.size() / 2].cast<double>() - p0,
+                        b = c.back().cast<double>() - p0, n = a.cross(b);
+  const Eigen::Vector3d centre =
+      p0 + (a.squaredNorm() * b - b.squaredNorm() * a).cross(n) / (2 * n.squaredNorm());
+  PipeEstimate slid = right;  // 0.3 rad round the arc's centre: 45 mm along itself, over 2 D
+  slid.model_to_bin = right.model_to_bin * Eigen::Translation3d(centre) *
+                      Eigen::AngleAxisd(0.3, n.normalized()) * Eigen::Translation3d(-centre);
+  slid.check.agree_px = 800;
+  slid.check.ends_pinned = slid.check.ends_seen_ending = 1, slid.check.ends_continued = 0;
+  EXPECT_EQ(reading_read_worse(lm, right, slid, cfg), 1);
+  EXPECT_EQ(reading_read_worse(lm, slid, right, cfg), 0);
+  slid.check.outside_view = 0.3f;  // out of the view too
+  EXPECT_EQ(reading_read_worse(lm, right, slid, cfg), 1);
+  slid.check.agree_px = 900;  // about as well: the ends judge, not this rule
+  EXPECT_EQ(reading_read_worse(lm, right, slid, cfg), -1);
+  slid.check.agree_px = 800;
+  PipeEstimate near = right;  // a duplicate, not a second reading
+  near.model_to_bin.translation() += ((c[1] - c[0]).normalized() * 0.5 * d).cast<double>();
+  near.check.agree_px = 800;
+  EXPECT_EQ(reading_read_worse(lm, right, near, cfg), -1);
+  PipeEstimate after = slid;  // end to end with it: a pipe of its own
+  after.model_to_bin.translation() =
+      right.model_to_bin.translation() +
+      (right.model_to_bin.linear() * (c.back() - c.front()).cast<double>()) * 0.9;
+  EXPECT_EQ(reading_read_worse(lm, right, after, cfg), -1);
+}
+
 // Beyond the paper: the turns judged about a pipe's own length. An elbow that a quarter turn moves
 // mostly off itself has three quarter turns about the principal axis of its centreline, which each keep the
 // centreline's centroid and axis in place and four of which are no turn; a straight tube (the same pick

@@ -256,11 +256,15 @@ const char* withheld_label(int k) {
 }
 
 namespace {
-// Whether a and b, further apart than one pipe's duplicates and confirmed by the image about as
-// well, put one pipe's tube in one place: kRivalMinSharedTube of it one way or the other, or, where
-// each_way_share is given, at least that share of it each way.
-bool one_pipe_two_readings(const LocatorModel& lm, const PipeEstimate& a, const PipeEstimate& b,
-                           const LocateConfig& cfg, float each_way_share = 0) {
+// Half of the tube where the other has it, each way: two straight tubes touching end to end,
+// each pose slid a little towards the other, share a quarter of it.
+constexpr float kOneReadingMinSharedTube = 0.5f;
+
+// Whether a and b, further apart than one pipe's duplicates, put one pipe's tube in one place:
+// kRivalMinSharedTube of it one way or the other, or, where each_way_share is given, at least
+// that share of it each way.
+bool one_pipe_two_places(const LocatorModel& lm, const PipeEstimate& a, const PipeEstimate& b,
+                         float each_way_share = 0) {
   const Eigen::Vector3d ca = a.model_to_bin * lm.centroid.cast<double>(),
                         cb = b.model_to_bin * lm.centroid.cast<double>();
   // Every point of a pipe lies within L (the longest distance between two) of its centroid: two
@@ -268,10 +272,15 @@ bool one_pipe_two_readings(const LocatorModel& lm, const PipeEstimate& a, const 
   if ((ca - cb).norm() > 2.0 * double(lm.extent_l_mm) + double(lm.tube_d_mm)) return false;
   const float same_pipe_mm = kSamePipeOfD * lm.tube_d_mm;
   if (pose_distance_mm(lm, a.model_to_bin, b.model_to_bin, same_pipe_mm) <= same_pipe_mm) return false;
-  if (!as_good(a.check, b.check, cfg) || !as_good(b.check, a.check, cfg)) return false;
   if (!(each_way_share > 0)) return share_the_tube(lm, a.model_to_bin, b.model_to_bin);
   return shared_tube(lm, a.model_to_bin, b.model_to_bin) >= each_way_share &&
          shared_tube(lm, b.model_to_bin, a.model_to_bin) >= each_way_share;
+}
+// ... and the image confirms them about as well: one pipe read two ways.
+bool one_pipe_two_readings(const LocatorModel& lm, const PipeEstimate& a, const PipeEstimate& b,
+                           const LocateConfig& cfg, float each_way_share = 0) {
+  return as_good(a.check, b.check, cfg) && as_good(b.check, a.check, cfg) &&
+         one_pipe_two_places(lm, a, b, each_way_share);
 }
 }  // namespace
 
@@ -284,15 +293,20 @@ bool read_two_ways(const LocatorModel& lm, const PipeEstimate& a, const PipeEsti
 int reading_its_ends_refute(const LocatorModel& lm, const PipeEstimate& a, const PipeEstimate& b,
                             const LocateConfig& cfg) {
   if (a.check.outside_view > 0 || b.check.outside_view > 0 || !cfg.pin_slides_by_ends) return -1;
-  // Half of the tube where the other has it, each way: two straight tubes touching end to end,
-  // each pose slid a little towards the other, share a quarter of it.
-  constexpr float kOneReadingMinSharedTube = 0.5f;
   if (!one_pipe_two_readings(lm, a, b, cfg, kOneReadingMinSharedTube)) return -1;
   const auto shown = [&](const Verification& v) {
     return lm.slides.empty() ? ends_shown(v) : ends_shown_outright(v);
   };
   const int sa = shown(a.check), sb = shown(b.check);
   return sa == sb ? -1 : sa < sb ? 0 : 1;
+}
+
+int reading_read_worse(const LocatorModel& lm, const PipeEstimate& a, const PipeEstimate& b,
+                       const LocateConfig& cfg) {
+  const bool a_as_good = as_good(a.check, b.check, cfg), b_as_good = as_good(b.check, a.check, cfg);
+  if (a_as_good == b_as_good) return -1;
+  if (!one_pipe_two_places(lm, a, b, kOneReadingMinSharedTube)) return -1;
+  return a_as_good ? 1 : 0;
 }
 
 bool turn_may_replace(const Verification& turned, const Verification& found) {

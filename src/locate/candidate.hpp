@@ -300,6 +300,14 @@ bool read_two_ways(const LocatorModel& lm, const PipeEstimate& a, const PipeEsti
 // where they do not tell.
 int reading_its_ends_refute(const LocatorModel& lm, const PipeEstimate& a, const PipeEstimate& b,
                             const LocateConfig& cfg);
+// Beyond the paper: of two readings of one pipe by two regions, each putting half of the tube
+// where the other has it, the one the image confirms clearly worse (not as_good) is no pick: the
+// pipe lies where the better reading has it, whether or not that one is pickable (an arc's reading
+// slid 31 mm round itself, one end seen ending, agreeing 0.87, was handed out while the right
+// reading, agreeing 0.91, was withheld as sliding: 14-arc of the zoo). Returns the index (0: a,
+// 1: b) of the reading confirmed worse, or -1.
+int reading_read_worse(const LocatorModel& lm, const PipeEstimate& a, const PipeEstimate& b,
+                       const LocateConfig& cfg);
 
 // The deadline a candidate's work stops at (a cancel flag, when set, ends it as well).
 struct Deadline {

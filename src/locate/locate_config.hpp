@@ -201,7 +201,8 @@ struct LocateConfig {
   bool twin_beyond_resolution_ambiguous = true;
   bool rivals_across_regions = true;  // two regions' estimates that read one pipe two ways, the
                                       // image confirming both about as well: both ambiguous (both
-                                      // in view: the one whose ends show worse dropped)
+                                      // in view: the one whose ends show worse dropped); the image
+                                      // confirming one clearly worse: that one ambiguous
   bool judge_slides = true;  // the found pose slid along the pipe itself (an arc about its centre,
                              // a coil along its helix, a straight run along its axis) is a rival too
   bool pin_slides_by_ends = true;  // a pipe that slides along itself is pickable only where the

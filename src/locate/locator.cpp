@@ -377,11 +377,19 @@ void Locator::merge_estimate(int c) {
 // first searches' estimates, and the second searches' too where those run before the pick
 // (second_search_may_pick): after a pick, the second searches' poses are never handed out.
 // Wholly in the view, the reading whose ends the image shows worse is no estimate of the pipe
-// (reading_its_ends_refute): its region's outcome becomes "duplicate".
+// (reading_its_ends_refute): its region's outcome becomes "duplicate". In or out of the view, a
+// reading the image confirms clearly worse than another's of the pipe is ambiguous
+// (reading_read_worse).
 void Locator::mark_pipes_read_two_ways() {
   auto& es = out_.estimates;
   const auto dropped = [&](const PipeEstimate& e) {
     return out_.traces[std::size_t(e.candidate)].outcome == CandidateOutcome::duplicate;
+  };
+  const auto mark_read_two_ways = [](PipeEstimate* e) {
+    if (!e->ambiguous()) e->score *= kAmbiguousScoreFactor;
+    e->ambiguous_why |= kAmbiguousReadTwoWays;
+    e->pickable = e->unresolved = false;
+    e->withheld |= kWithheldAmbiguous;
   };
   for (std::size_t i = 0; i < es.size(); ++i)
     for (std::size_t j = i + 1; j < es.size() && !dropped(es[i]); ++j) {
@@ -391,13 +399,13 @@ void Locator::mark_pipes_read_two_ways() {
         out_.traces[std::size_t(es[refuted == 0 ? i : j].candidate)].outcome = CandidateOutcome::duplicate;
         continue;
       }
-      if (!read_two_ways(lm_, es[i], es[j], cfg_)) continue;
-      for (PipeEstimate* e : {&es[i], &es[j]}) {
-        if (!e->ambiguous()) e->score *= kAmbiguousScoreFactor;
-        e->ambiguous_why |= kAmbiguousReadTwoWays;
-        e->pickable = e->unresolved = false;
-        e->withheld |= kWithheldAmbiguous;
+      const int worse = reading_read_worse(lm_, es[i], es[j], cfg_);
+      if (worse >= 0) {
+        mark_read_two_ways(&es[worse == 0 ? i : j]);
+        continue;
       }
+      if (!read_two_ways(lm_, es[i], es[j], cfg_)) continue;
+      for (PipeEstimate* e : {&es[i], &es[j]}) mark_read_two_ways(e);
     }
   es.erase(std::remove_if(es.begin(), es.end(), dropped), es.end());
 }
