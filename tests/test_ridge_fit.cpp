@@ -304,10 +304,10 @@ TEST(PoseDistance, OfTwoReadingsOfOnePipeTheOneConfirmedClearlyWorseIsNamed) {
   near.model_to_bin.translation() += ((c[1] - c[0]).normalized() * 0.5 * d).cast<double>();
   near.check.agree_px = 800;
   EXPECT_EQ(reading_read_worse(lm, right, near, cfg), -1);
-  PipeEstimate after = slid;  // end to end with it: a pipe of its own
-  after.model_to_bin.translation() =
-      right.model_to_bin.translation() +
+  PipeEstimate after = right;  // end to end with it, confirmed clearly worse: a pipe of its own
+  after.model_to_bin.translation() +=
       (right.model_to_bin.linear() * (c.back() - c.front()).cast<double>()) * 0.9;
+  after.check.agree_px = 800;
   EXPECT_EQ(reading_read_worse(lm, right, after, cfg), -1);
 }
 
