@@ -379,22 +379,29 @@ struct SimService {
   }
 };
 
-// The pipe of the bin nearest a pose (MSSD) and its error; -1 where none is within bound_mm.
+// The pipe of the bin nearest a pose (MSSD over `vertices`, the pipe mapped by `symmetries`) and
+// its error; -1 where none is within bound_mm.
+int nearest_pipe(const SimSource& sim, const std::vector<Eigen::Vector3d>& vertices,
+                 const std::vector<Pose>& symmetries, const Pose& pose, double bound_mm,
+                 double* error_mm = nullptr) {
+  const std::vector<Pose> pipes = sim.pipes_in_camera();
+  int best = -1;
+  double best_err = bound_mm;
+  for (std::size_t i = 0; i < pipes.size(); ++i) {
+    const double err = mssd(vertices, pose, pipes[i], symmetries, best_err);
+    if (err <= best_err) best_err = err, best = int(i);
+  }
+  if (error_mm) *error_mm = best_err;
+  return best;
+}
+// ... of the S-bend, its symmetries not considered.
 int nearest_pipe(const SimSource& sim, const Pose& pose, double bound_mm, double* error_mm = nullptr) {
   static const std::vector<Eigen::Vector3d> v = [] {
     std::vector<Eigen::Vector3d> out;
     for (const auto& p : sbend().mesh.vertices) out.push_back(p.cast<double>());
     return out;
   }();
-  const std::vector<Pose> pipes = sim.pipes_in_camera();
-  int best = -1;
-  double best_err = bound_mm;
-  for (std::size_t i = 0; i < pipes.size(); ++i) {
-    const double err = mssd(v, pose, pipes[i], {}, best_err);
-    if (err <= best_err) best_err = err, best = int(i);
-  }
-  if (error_mm) *error_mm = best_err;
-  return best;
+  return nearest_pipe(sim, v, {}, pose, bound_mm, error_mm);
 }
 
 double best_error(const SimSource& sim, const Pose& pose) {
@@ -524,6 +531,46 @@ class GripperTakesNothing : public FrameSource {
   SimSource sim_;
 };
 
+// What a cell whose gripper takes nothing is handed out in up to `locates` LOCATEs: the pipe each
+// DONE_OK's pose lies on (-1: none within 10 mm, a wrong pose), the last status, and how many
+// poses the last LOCATE withheld as tried.
+struct PicksTakingNothing {
+  std::vector<int> pipes;
+  reg::Status last = reg::Status::ready;
+  int tried = 0;
+  std::size_t pipes_left = 0;
+};
+PicksTakingNothing handed_out_taking_nothing(const PipeModel& model, const AppConfig& cfg, int locates) {
+  auto src = std::make_unique<GripperTakesNothing>(model, cfg.source.sim);
+  const GripperTakesNothing* gripper = src.get();
+  Service service(cfg, model, std::move(src));
+  // Each pose's pipe as the scorer judges it: the model's symmetries, a straight tube's turns.
+  std::vector<Eigen::Vector3d> vertices;
+  for (const auto& p : model.mesh.vertices) vertices.push_back(p.cast<double>());
+  const std::vector<Pose> symmetries = with_tube_turns(vertices, model.symmetries);
+  PicksTakingNothing out;
+  for (int cycle = 1; cycle <= locates; ++cycle) {
+    const reg::Result& r = service.run(1, std::uint16_t(cycle), Clock::now());
+    out.last = r.status;
+    out.tried = service.record().withheld[std::size_t(withheld_index(kWithheldTookNothing))];
+    if (r.status != reg::Status::done_ok) break;
+    out.pipes.push_back(nearest_pipe(gripper->sim(), vertices, symmetries, *service.presented(), 10.0));
+    EXPECT_GE(out.pipes.back(), 0) << "cycle " << cycle << ": a wrong pose";
+    service.after_publish();  // the robot goes there and takes nothing
+  }
+  out.pipes_left = gripper->sim().pipes_in_camera().size();
+  return out;
+}
+
+void expect_each_pipe_handed_out_once(const PicksTakingNothing& h) {
+  EXPECT_EQ(h.last, reg::Status::done_none);
+  ASSERT_GE(h.pipes.size(), 1u);
+  std::vector<int> once = h.pipes;
+  std::sort(once.begin(), once.end());
+  EXPECT_EQ(std::unique(once.begin(), once.end()), once.end()) << "a pipe handed out twice";
+  EXPECT_GE(h.tried, 1);  // the last LOCATE found them again and says why they are withheld
+}
+
 // A pose whose pick left the bin as it was is not handed out again while it stays so
 // (service.withhold_unchanged_picks): the robot is sent to each pipe once, then the service answers
 // DONE_NONE and names the poses withheld as tried. Turned off, the same pipes come again and again.
@@ -533,35 +580,28 @@ TEST(Service, APoseWhosePickTookNothingIsNotHandedOutAgain) {
     test::TempDir dir;
     AppConfig cfg = bin_to_clear(dir, 3, 21);
     cfg.service.withhold_unchanged_picks = withhold;
-    auto src = std::make_unique<GripperTakesNothing>(sbend(), cfg.source.sim);
-    const GripperTakesNothing* gripper = src.get();
-    Service service(cfg, sbend(), std::move(src));
-    std::vector<int> pipes_handed_out;
-    int tried = 0;
-    reg::Status last = reg::Status::ready;
-    for (int cycle = 1; cycle <= 6; ++cycle) {
-      const reg::Result& r = service.run(1, std::uint16_t(cycle), Clock::now());
-      last = r.status;
-      tried = service.record().withheld[std::size_t(withheld_index(kWithheldTookNothing))];
-      if (r.status != reg::Status::done_ok) break;
-      pipes_handed_out.push_back(nearest_pipe(gripper->sim(), *service.presented(), 10.0));
-      EXPECT_GE(pipes_handed_out.back(), 0) << "cycle " << cycle << ": a wrong pose";
-      service.after_publish();  // the robot goes there and takes nothing
-    }
-    ASSERT_EQ(gripper->sim().pipes_in_camera().size(), 3u);
+    const PicksTakingNothing h = handed_out_taking_nothing(sbend(), cfg, 6);
+    ASSERT_EQ(h.pipes_left, 3u);
     if (withhold) {
-      EXPECT_EQ(last, reg::Status::done_none);
-      ASSERT_GE(pipes_handed_out.size(), 1u);
-      std::vector<int> once = pipes_handed_out;
-      std::sort(once.begin(), once.end());
-      EXPECT_EQ(std::unique(once.begin(), once.end()), once.end()) << "a pipe handed out twice";
-      EXPECT_GE(tried, 1);  // the last LOCATE found them again and says why they are withheld
+      expect_each_pipe_handed_out_once(h);
     } else {
-      EXPECT_EQ(last, reg::Status::done_ok);
-      EXPECT_EQ(pipes_handed_out.size(), 6u);
-      EXPECT_EQ(tried, 0);
+      EXPECT_EQ(h.last, reg::Status::done_ok);
+      EXPECT_EQ(h.pipes.size(), 6u);
+      EXPECT_EQ(h.tried, 0);
     }
   }
+}
+
+// ... also a straight tube, which a turn about its own length maps onto itself: each frame may
+// read it turned otherwise, its surface up to a diameter away, and it is still the same pick.
+TEST(Service, AStraightTubeWhosePickTookNothingIsNotHandedOutAgain) {
+  const PipeModel tube = pipe_of("S86", 21.7, "straight tube");
+  test::TempDir dir;
+  AppConfig cfg = bin_to_clear(dir, 3, 1000);
+  cfg.source.sim.camera_height_min_mm = 779, cfg.source.sim.camera_height_max_mm = 879;
+  const PicksTakingNothing h = handed_out_taking_nothing(tube, cfg, 8);
+  ASSERT_EQ(h.pipes_left, 3u);
+  expect_each_pipe_handed_out_once(h);
 }
 
 bool ends_with(const std::string& f, const std::string& end) {

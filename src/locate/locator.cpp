@@ -417,15 +417,21 @@ void Locator::set_tried(const Pose* model_to_cam, int n) {
 
 // Beyond the paper: a pose handed out whose pick left the bin unchanged (set_tried) is not handed
 // out again while it stays so: a cell whose gripper cannot take a pipe, or whose pose of it is
-// wrong, would otherwise be sent to the same place frame after frame. Only the same reading
-// again, up to the noise: within kTriedSameOfD D everywhere. A right pose beside a wrong one just
-// over the scorer's bound stays pickable (within 2 D instead, two pipes fewer were taken over 6
-// bins of 7 shapes; docs/experiments.md, "A pick that took nothing").
+// wrong, would otherwise be sent to the same place frame after frame. Only the same pick again,
+// up to the noise: within kTriedSameOfD D everywhere, for a straight tube on its centreline
+// (pick_distance_mm: read turned about its own length on the next frame, its surface up to D
+// away, it is the same pick, and compared surface to surface it was handed out again). A bent
+// pipe's turn about its length is another pick: compared on the centreline, a 12-Z of the zoo had
+// its right reading withheld after a wrong one turned 40 degrees (3 pipes fewer in 6 bins). A
+// right pose beside a wrong one just over the scorer's bound stays pickable (within 2 D instead,
+// two pipes fewer were taken over 6 bins of 7 shapes; docs/experiments.md, "A pick that took
+// nothing").
 void Locator::mark_tried() {
   const float same_mm = kTriedSameOfD * lm_.tube_d_mm;
+  const auto distance_mm = lm_.straight ? pick_distance_mm : pose_distance_mm;
   for (PipeEstimate& e : out_.estimates)
     for (int k = 0; k < tried_count_; ++k)
-      if (pose_distance_mm(lm_, tried_[k], e.model_to_cam, same_mm) <= same_mm) {
+      if (distance_mm(lm_, tried_[k], e.model_to_cam, same_mm) <= same_mm) {
         e.pickable = e.unresolved = false;
         e.withheld |= kWithheldTookNothing;
         break;

@@ -95,7 +95,8 @@ class Locator {
   void set_cancel_flag(const std::atomic<bool>* cancel) { cancel_ = cancel; }
   // Poses (model -> camera) handed out before whose picks left the bin unchanged there (the
   // service's TriedPicks): from the next frame on, an estimate within kTriedSameOfD D of one of
-  // them (every check point, the model's symmetries taken into account) is not pickable
+  // them (every check point, the model's symmetries taken into account; a straight tube's
+  // centreline, since turned about its own length it is the same pick) is not pickable
   // (kWithheldTookNothing), so that the next pose, or the second searches, come first. At most
   // kMaxTried; the first n are kept.
   static constexpr int kMaxTried = 8;
