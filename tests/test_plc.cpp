@@ -112,17 +112,37 @@ TEST(RegisterMap, PoseIsNaNUnlessDoneOk) {
   EXPECT_EQ(decode_u32(&map[reg::kCycles], enc.order), 70000u);
   r.status = reg::Status::done_none;  // a pose left in the struct must not reach the registers
   reg::write_result_block(r, enc, map);
-  for (int i = reg::kPose; i < reg::kSize; i += 2)
+  for (int i = reg::kPose; i < reg::kPoseEnd; i += 2)
     EXPECT_TRUE(std::isnan(decode_float(&map[i], enc.order))) << i;
   enc.scaled_int32 = true;
   reg::write_result_block(r, enc, map);
-  for (int i = reg::kPose; i < reg::kSize; i += 2)
+  for (int i = reg::kPose; i < reg::kPoseEnd; i += 2)
     EXPECT_EQ(std::int32_t(decode_u32(&map[i], enc.order)), kScaledNone);
   r.status = reg::Status::done_ok;
   reg::write_result_block(r, enc, map);
   EXPECT_EQ(std::int32_t(decode_u32(&map[reg::kPose], enc.order)), 100);       // 1 mm in 0.01 mm
   EXPECT_EQ(std::int32_t(decode_u32(&map[reg::kPose + 6], enc.order)), 4000);  // 4 deg in 0.001 deg
   EXPECT_EQ(std::int32_t(decode_u32(&map[reg::kScore], enc.order)), 7500);
+}
+
+// HELD, HELD_WHY and REGIONS are counts, written whatever the status: a DONE_NONE says what the
+// LOCATE saw and held back.
+TEST(RegisterMap, WhatWasHeldBackIsWrittenWithEveryResult) {
+  reg::Result r;
+  r.status = reg::Status::done_none;
+  r.held = 3, r.held_why = 0x81, r.regions = 7;
+  std::uint16_t map[reg::kSize] = {};
+  for (const bool scaled : {false, true}) {
+    reg::Encoding enc;
+    enc.scaled_int32 = scaled;
+    reg::write_result_block(r, enc, map);
+    EXPECT_EQ(map[reg::kHeld], 3);
+    EXPECT_EQ(map[reg::kHeldWhy], 0x81);  // ambiguous, took nothing
+    EXPECT_EQ(map[reg::kRegions], 7);
+  }
+  reg::write_initial(reg::Encoding{}, map);
+  EXPECT_EQ(map[reg::kHeld], 0);
+  EXPECT_EQ(map[reg::kRegions], 0);
 }
 
 }  // namespace

@@ -467,6 +467,13 @@ TEST(Service, ASmallBinIsClearedWithoutAWrongPick) {
   }
   EXPECT_EQ(wrong, 0);
   EXPECT_TRUE(sim->pipes_in_camera().empty()) << sim->pipes_in_camera().size() << " of 5 pipes left";
+  // The emptied bin: DONE_NONE, and the registers say it shows no pipe (nothing held back, no
+  // region), where a bin left with pipes the cell cannot pick says it holds some (below).
+  const reg::Result& r = service.run(1, 99, Clock::now());
+  EXPECT_EQ(r.status, reg::Status::done_none);
+  EXPECT_EQ(r.held, 0);
+  EXPECT_EQ(r.held_why, 0);
+  EXPECT_EQ(r.regions, 0);
   // Every pick took its pipe: no frame is kept as one whose pick took nothing.
   EXPECT_FALSE(std::filesystem::exists(dir.file("log/took-nothing")));
 }
@@ -537,6 +544,7 @@ class GripperTakesNothing : public FrameSource {
 struct PicksTakingNothing {
   std::vector<int> pipes;
   reg::Status last = reg::Status::ready;
+  reg::Result last_result;
   int tried = 0;
   std::size_t pipes_left = 0;
 };
@@ -552,6 +560,7 @@ PicksTakingNothing handed_out_taking_nothing(const PipeModel& model, const AppCo
   for (int cycle = 1; cycle <= locates; ++cycle) {
     const reg::Result& r = service.run(1, std::uint16_t(cycle), Clock::now());
     out.last = r.status;
+    out.last_result = r;
     out.tried = service.record().withheld[std::size_t(withheld_index(kWithheldTookNothing))];
     if (r.status != reg::Status::done_ok) break;
     out.pipes.push_back(nearest_pipe(gripper->sim(), vertices, symmetries, *service.presented(), 10.0));
@@ -569,6 +578,10 @@ void expect_each_pipe_handed_out_once(const PicksTakingNothing& h) {
   std::sort(once.begin(), once.end());
   EXPECT_EQ(std::unique(once.begin(), once.end()), once.end()) << "a pipe handed out twice";
   EXPECT_GE(h.tried, 1);  // the last LOCATE found them again and says why they are withheld
+  // ... and so do its registers: the PLC reads a bin with pipes held back, not an empty one.
+  EXPECT_GE(h.last_result.held, h.tried);
+  EXPECT_TRUE(h.last_result.held_why & kWithheldTookNothing) << h.last_result.held_why;
+  EXPECT_GE(h.last_result.regions, 1);
 }
 
 // A pose whose pick left the bin as it was is not handed out again while it stays so
@@ -933,6 +946,9 @@ TEST(Service, APipeTheSensorDoesNotResolveIsNotHandedOut) {
   for (int i = 0; i < kLocates; ++i) {
     const reg::Result& r = service.run(1, std::uint16_t(i + 1), Clock::now());
     EXPECT_EQ(r.status, reg::Status::done_none) << "LOCATE " << i;
+    if (service.record().unresolved > 0) {
+      EXPECT_TRUE(r.held_why & kWithheldUnresolved) << "LOCATE " << i;
+    }
     unresolved += service.record().unresolved;
     noisy += service.record().withheld[std::size_t(withheld_index(kWithheldUnresolved))];
     service.log().write(service.record());

@@ -9,7 +9,10 @@ import time
 from pymodbus.client import ModbusTcpClient
 
 CMD, REQ_ID, STATUS, ACK_ID, ERROR, HEARTBEAT, COUNT, INDEX = 0, 1, 10, 11, 12, 13, 14, 15
-CYCLE_MS, FRAME_AGE_MS, CYCLES, POSE, SCORE, QUAT, SIZE = 16, 17, 18, 20, 32, 34, 42
+CYCLE_MS, FRAME_AGE_MS, CYCLES, POSE, SCORE, QUAT, POSE_END = 16, 17, 18, 20, 32, 34, 42
+HELD, HELD_WHY, REGIONS, SIZE = 42, 43, 44, 45
+# HELD_WHY's bits: the checks that held the LOCATE's poses back (REGISTERS.md).
+HELD_WHY_NAMES = ["ambiguous", "covered", "part seen", "goes on", "no end", "unsure", "noisy", "took nothing"]
 LOCATE, NEXT, CLEAR_ERROR = 1, 2, 3
 READY, BUSY, DONE_OK, DONE_NONE, STATUS_ERROR = 0, 1, 2, 3, 4
 
@@ -21,6 +24,11 @@ def f32(regs, at):
 
 def u32(regs, at):
     return (regs[at] << 16) | regs[at + 1]
+
+
+def held_why(bits):
+    """HELD_WHY as names."""
+    return [name for k, name in enumerate(HELD_WHY_NAMES) if bits & (1 << k)]
 
 
 def rot_zyx(rx, ry, rz):

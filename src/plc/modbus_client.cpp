@@ -38,6 +38,7 @@ bool PlcClientLink::connect() {
     return false;
   }
   connected_ = true;
+  plc_holds_held_ = true;
   connected_at_ = last_read_ = Clock::now();
   reads_ = 0;
   backoff_ms_ = 100;
@@ -76,8 +77,20 @@ void PlcClientLink::disconnect(const char* why) {
 bool PlcClientLink::flush() {
   const int base = cfg_.base;
   if (owe_block_) {  // ERROR .. QZ in one request, so the PLC never sees half a result
-    if (modbus_write_registers(ctx_, base + reg::kError, reg::kSize - reg::kError, &image_[reg::kError]) < 0)
+    if (modbus_write_registers(ctx_, base + reg::kError, reg::kPoseEnd - reg::kError, &image_[reg::kError]) <
+        0)
       return disconnect("writing the result block"), false;
+    // ... and HELD .. REGIONS, before STATUS and ACK_ID as well.
+    if (plc_holds_held_ &&
+        modbus_write_registers(ctx_, base + reg::kHeld, reg::kSize - reg::kHeld, &image_[reg::kHeld]) < 0) {
+      if (errno != EMBXILADD) return disconnect("writing HELD .. REGIONS"), false;
+      spdlog::warn(
+          "plc: the PLC at {}:{} has no registers {}..{} (HELD, HELD_WHY, REGIONS: what a LOCATE "
+          "saw but did not hand out); they are not written on this connection. Extend its "
+          "block to {} registers from {} to read them",
+          cfg_.address, cfg_.port, base + reg::kHeld, base + reg::kSize - 1, reg::kSize, base);
+      plc_holds_held_ = false;
+    }
     owe_block_ = false;
     owe_heartbeat_ = false;
   }

@@ -30,6 +30,9 @@ void write_result_block(const Result& r, const Encoding& enc, std::uint16_t* map
   put(valid ? r.score : nan, 10000.0, enc, &map[kScore]);
   for (int i = 0; i < 4; ++i)
     put(valid ? r.pose->wxyz[std::size_t(i)] : nan, 10000.0, enc, &map[kQuat + 2 * i]);
+  map[kHeld] = r.held;
+  map[kHeldWhy] = r.held_why;
+  map[kRegions] = r.regions;
 }
 
 void write_initial(const Encoding& enc, std::uint16_t* map) {

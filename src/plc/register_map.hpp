@@ -15,7 +15,12 @@ constexpr int kStatus = 10, kAckId = 11, kError = 12, kHeartbeat = 13, kCount = 
               kCycleMs = 16, kFrameAgeMs = 17, kCycles = 18;  // u32 at 18-19
 constexpr int kPose = 20;                                     // X Y Z RX RY RZ, 2 registers each
 constexpr int kScore = 32, kQuat = 34;                        // QW QX QY QZ
-constexpr int kSize = 42;
+constexpr int kPoseEnd = 42;                                  // one past QZ
+// Beyond DESIGN.md's map: what the last LOCATE saw but did not hand out, so that a PLC told
+// DONE_NONE can tell a bin holding pipes it cannot pick (shake it) from one that shows none
+// (refill it).
+constexpr int kHeld = 42, kHeldWhy = 43, kRegions = 44;
+constexpr int kSize = 45;
 
 enum class Command : std::uint16_t { locate = 1, next = 2, clear_error = 3 };
 enum class Status : std::uint16_t { ready = 0, busy = 1, done_ok = 2, done_none = 3, error = 4 };
@@ -41,9 +46,13 @@ struct Result {
   std::uint32_t cycles = 0;
   std::optional<RobotPose> pose;  // only read when status is done_ok
   float score = 0;
+  // Of the last LOCATE that localized a frame: the poses it found but held back (not pickable),
+  // the checks that held them (Withheld's bits, OR-ed), and the candidate regions (pipe-like tops)
+  // it found. 0 where the LOCATE got no frame.
+  std::uint16_t held = 0, held_why = 0, regions = 0;
 };
 
-// Writes ERROR .. QZ (12..41) of `map` (kSize registers from the base). STATUS and ACK_ID are
+// Writes ERROR .. REGIONS (12..44) of `map` (kSize registers from the base). STATUS and ACK_ID are
 // left to the handshake, which writes them last. Unless the status is DONE_OK the pose, score
 // and quaternion hold NaN (or the int32 sentinel), so a stale pose can never be read as new.
 void write_result_block(const Result& result, const Encoding& enc, std::uint16_t* map);

@@ -149,6 +149,7 @@ void Service::locate(Clock::time_point trigger) {
   record_.grab = grab;
   record_.grab_ms = ms_between(trigger, grabbed);
   record_.frame_sequence = frame_.sequence;
+  result_.held = result_.held_why = result_.regions = 0;
   if (grab != GrabStatus::ok) {
     result_.status = reg::Status::error;
     result_.error =
@@ -177,10 +178,15 @@ void Service::locate(Clock::time_point trigger) {
     record_.candidates = int(out.traces.size());
     for (const CandidateTrace& t : out.traces) record_.tried += t.outcome != CandidateOutcome::budget;
     record_.accepted = int(out.estimates.size());
+    // What it saw and did not hand out, for the PLC: a DONE_NONE with poses held back or regions
+    // found is a bin with pipes the cell cannot pick as they lie; one with neither shows none.
     for (const PipeEstimate& e : out.estimates) {
       count_bits(e.withheld, &record_.withheld);
       count_bits(e.ambiguous_why, &record_.ambiguous_why);
+      if (e.withheld != 0 && result_.held < 0xFFFF) ++result_.held;
+      result_.held_why = std::uint16_t(result_.held_why | e.withheld);
     }
+    result_.regions = clamp_u16(double(record_.candidates));
     record_.cut_by_shutdown = out.budget_exhausted && cancel_ && cancel_->load();
     record_.budget_exhausted = out.budget_exhausted && !record_.cut_by_shutdown;
     note_unresolved(out);

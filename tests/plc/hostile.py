@@ -9,6 +9,7 @@ import threading
 import time
 
 STATUS, ACK_ID, HEARTBEAT, LOCATE = 10, 11, 13, 1
+MAP_SIZE = 45  # registers 0..44 (REGISTERS.md)
 # Under the sanitizers the service runs slower (TSan about 30 times): time bounds and budgets grow.
 SLOWDOWN = float(os.environ.get("PIPELOC_TEST_SLOWDOWN", "1"))
 

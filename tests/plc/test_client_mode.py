@@ -17,8 +17,8 @@ BINARY, PORT = sys.argv[1], int(sys.argv[2])
 HERE = os.path.dirname(os.path.abspath(__file__))
 
 
-def start_plc():
-    proc = subprocess.Popen([sys.executable, os.path.join(HERE, "fake_plc.py"), str(PORT)])
+def start_plc(registers=100):
+    proc = subprocess.Popen([sys.executable, os.path.join(HERE, "fake_plc.py"), str(PORT), str(registers)])
     end = time.time() + 20
     while time.time() < end:
         try:
@@ -35,16 +35,16 @@ class PlcSide:
         self.c = ModbusTcpClient("127.0.0.1", port=PORT, timeout=3)
         assert self.c.connect()
 
-    def read(self):
-        rr = self.c.read_holding_registers(0, SIZE, slave=1)
+    def read(self, count=SIZE):
+        rr = self.c.read_holding_registers(0, count, slave=1)
         assert not rr.isError(), rr
         return rr.registers
 
-    def command(self, cmd, req_id, timeout=30):
+    def command(self, cmd, req_id, timeout=30, count=SIZE):
         assert not self.c.write_registers(CMD, [cmd, req_id], slave=1).isError()
         end = time.time() + timeout
         while time.time() < end:
-            regs = self.read()
+            regs = self.read(count)
             if regs[ACK_ID] == req_id:
                 return regs
             time.sleep(0.02)
@@ -59,6 +59,7 @@ class ClientMode(unittest.TestCase):
             plc = PlcSide()
             regs = plc.command(LOCATE, 1)
             self.assertIn(regs[STATUS], (DONE_OK, DONE_NONE))
+            self.assertGreaterEqual(regs[REGIONS], 1)  # HELD .. REGIONS written too
             if regs[STATUS] == DONE_OK:
                 err = svc.best_error(u32(regs, CYCLES), decode_pose(regs))
                 print(f"client mode: pose {err:.2f} mm from a true pipe")
@@ -73,19 +74,23 @@ class ClientMode(unittest.TestCase):
             plc_proc.wait()
             time.sleep(1.5)
             self.assertIsNone(svc.proc.poll(), "the service keeps running without its PLC")
-            # ... and comes back (a restarted PLC: its registers start from zero again).
-            plc_proc = start_plc()
+            # ... and comes back (a restarted PLC: its registers start from zero again), programmed
+            # for the map without HELD .. REGIONS: the service says so once and runs as before.
+            plc_proc = start_plc(POSE_END)
             plc = PlcSide()
             end = time.time() + 15
-            while time.time() < end and plc.read()[HEARTBEAT] == 0:
+            while time.time() < end and plc.read(POSE_END)[HEARTBEAT] == 0:
                 time.sleep(0.1)
-            self.assertGreater(plc.read()[HEARTBEAT], 0, "the heartbeat tells the PLC the link is back")
-            regs = plc.read()  # a restarted PLC's zeros are no command: nothing runs, no error
+            self.assertGreater(plc.read(POSE_END)[HEARTBEAT], 0, "the heartbeat tells the PLC the link is back")
+            regs = plc.read(POSE_END)  # a restarted PLC's zeros are no command: nothing runs, no error
             self.assertEqual((regs[STATUS], regs[ERROR], regs[ACK_ID]), (READY, 0, 0))
-            regs = plc.command(LOCATE, 2)
+            regs = plc.command(LOCATE, 2, count=POSE_END)
+            self.assertIn(regs[STATUS], (DONE_OK, DONE_NONE))
+            regs = plc.command(LOCATE, 3, count=POSE_END)
             self.assertIn(regs[STATUS], (DONE_OK, DONE_NONE))
             plc.c.close()
             self.assertIn("lost", svc.output())
+            self.assertEqual(svc.output().count("has no registers 42..44"), 1, svc.output())
         finally:
             code = svc.stop()
             plc_proc.kill()

@@ -35,7 +35,7 @@ class Handshake(unittest.TestCase):
         self.fail("no pose in %d LOCATEs" % tries)
 
     def assert_pose_nan(self, regs):
-        for i in range(POSE, SIZE, 2):
+        for i in range(POSE, POSE_END, 2):
             self.assertTrue(math.isnan(f32(regs, i)), f"register {i} is not NaN")
 
     def test_1_locate_next_clear(self):
@@ -55,6 +55,9 @@ class Handshake(unittest.TestCase):
         for r in range(3):
             for c in range(3):
                 self.assertAlmostEqual(rot[r][c], rq[r][c], places=4)
+        # What it saw and did not hand out: the pose came from a region.
+        self.assertGreaterEqual(regs[REGIONS], 1)
+        self.assertEqual(regs[HELD] == 0, regs[HELD_WHY] == 0)
         err = self.svc.best_error(frame, (rot, t))
         print(f"LOCATE: {regs[COUNT]} poses, first within {err:.2f} mm of a true pipe (frame {frame})")
         self.assertLessEqual(err, 10.0)

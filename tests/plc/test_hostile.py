@@ -16,7 +16,7 @@ import threading
 import time
 import unittest
 
-from hostile import LOCATE, SLOWDOWN, Closed, Probe, Raw, handshake
+from hostile import LOCATE, MAP_SIZE, SLOWDOWN, Closed, Probe, Raw, handshake
 from plc_harness import Service
 
 BINARY, PORT, SCENARIO = sys.argv[1], int(sys.argv[2]), sys.argv[3]
@@ -104,7 +104,7 @@ def churn(port, count, threads_n, q):
                     c.send(garbage[i % len(garbage)])
                     accept = c.connect_s
                 else:
-                    c.read(0, 42)
+                    c.read(0, MAP_SIZE)
                     accept = time.perf_counter() - start
                 c.close()
                 with lock:
@@ -133,7 +133,7 @@ def pollers(port, seconds, clients, rate_hz, q):
             try:
                 if c is None:
                     c = Raw(port)
-                c.read(0, 42)
+                c.read(0, MAP_SIZE)
                 served[k] += 1
             except (OSError, Closed):
                 reconnects[k] += 1
