@@ -31,6 +31,12 @@ def held_why(bits):
     return [name for k, name in enumerate(HELD_WHY_NAMES) if bits & (1 << k)]
 
 
+def pipes_held(regs):
+    """With DONE_NONE: the LOCATE held poses back or found regions, so the bin still holds pipes
+    the cell cannot pick as they lie (shake it); False: it showed none (refill it). REGISTERS.md."""
+    return regs[HELD] > 0 or regs[REGIONS] > 0
+
+
 def rot_zyx(rx, ry, rz):
     """R = Rz(rz) Ry(ry) Rx(rx), degrees: the ZYX convention of the pose registers."""
     a, b, c = (math.radians(v) for v in (rz, ry, rx))
