@@ -402,6 +402,7 @@ void read_plc(Section& s, std::vector<std::string>* warnings, PlcConfig* p) {
   s.integer("idle_timeout_ms", &p->idle_timeout_ms, 100, 86400000, "ms");
   s.texts("plc_addresses", &p->plc_addresses, is_ipv4_address, "IPv4 addresses such as \"192.168.0.10\"");
   s.integer("byte_timeout_ms", &p->byte_timeout_ms, 10, 5000, "ms");
+  s.boolean("write_held", &p->write_held);
   std::string order = word_order_name(p->encoding.order);
   s.text("word_order", &order, {"ABCD", "CDAB", "BADC", "DCBA"});
   p->encoding.order = parse_word_order(order);
@@ -422,7 +423,8 @@ void read_plc(Section& s, std::vector<std::string>* warnings, PlcConfig* p) {
   };
   if (p->mode != "server")
     ignored({"max_clients", "request_timeout_ms", "idle_timeout_ms", "plc_addresses"}, "server");
-  if (p->mode != "client") ignored({"unit_id", "poll_ms", "reconnect_max_ms", "byte_timeout_ms"}, "client");
+  if (p->mode != "client")
+    ignored({"unit_id", "poll_ms", "reconnect_max_ms", "byte_timeout_ms", "write_held"}, "client");
   if (!p->robot_from_camera.empty()) {
     const std::string why = rigid_transform_problem(p->robot_from_camera.data());
     if (!why.empty())

@@ -82,6 +82,8 @@ struct PlcConfig {
   int poll_ms = 50;                        // client mode: how often CMD/REQ_ID are read
   int reconnect_max_ms = 5000;             // client mode: backoff cap
   int byte_timeout_ms = 100;               // client mode: the PLC's reply may pause this long between bytes
+  bool write_held = false;  // client mode: also write HELD, HELD_WHY, REGIONS (42-44); off, a PLC
+                            // block programmed for 0-41 is never written beyond it
   reg::Encoding encoding;
   EulerConvention euler = EulerConvention::zyx;
   std::vector<double> robot_from_camera;  // optional 16 values, row-major, mm: hand-eye

@@ -38,7 +38,7 @@ bool PlcClientLink::connect() {
     return false;
   }
   connected_ = true;
-  plc_holds_held_ = true;
+  plc_holds_held_ = cfg_.write_held;
   connected_at_ = last_read_ = Clock::now();
   reads_ = 0;
   backoff_ms_ = 100;
@@ -80,15 +80,19 @@ bool PlcClientLink::flush() {
     if (modbus_write_registers(ctx_, base + reg::kError, reg::kPoseEnd - reg::kError, &image_[reg::kError]) <
         0)
       return disconnect("writing the result block"), false;
-    // ... and HELD .. REGIONS, before STATUS and ACK_ID as well.
+    // ... and, where plc.write_held says the PLC has them, HELD .. REGIONS, before STATUS and
+    // ACK_ID as well. A PLC that refuses them (any exception reply: no such registers, a gateway's
+    // path) is told about once per connection and served without them; no reply is a lost link.
     if (plc_holds_held_ &&
         modbus_write_registers(ctx_, base + reg::kHeld, reg::kSize - reg::kHeld, &image_[reg::kHeld]) < 0) {
-      if (errno != EMBXILADD) return disconnect("writing HELD .. REGIONS"), false;
+      if (!(errno > MODBUS_ENOBASE && errno <= MODBUS_ENOBASE + MODBUS_EXCEPTION_GATEWAY_TARGET))
+        return disconnect("writing HELD .. REGIONS"), false;
       spdlog::warn(
-          "plc: the PLC at {}:{} has no registers {}..{} (HELD, HELD_WHY, REGIONS: what a LOCATE "
-          "saw but did not hand out); they are not written on this connection. Extend its "
-          "block to {} registers from {} to read them",
-          cfg_.address, cfg_.port, base + reg::kHeld, base + reg::kSize - 1, reg::kSize, base);
+          "plc: the PLC at {}:{} refused registers {}..{} (HELD, HELD_WHY, REGIONS: what a LOCATE saw "
+          "but did not hand out): {}; they are not written on this connection. Give its block {} "
+          "registers from {}, or set plc.write_held = false",
+          cfg_.address, cfg_.port, base + reg::kHeld, base + reg::kSize - 1, modbus_strerror(errno),
+          reg::kSize, base);
       plc_holds_held_ = false;
     }
     owe_block_ = false;

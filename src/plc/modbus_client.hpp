@@ -1,8 +1,8 @@
 // Client mode: the PLC is the Modbus TCP server and the service polls it. Every plc.poll_ms it
 // reads CMD and REQ_ID; it writes the result block in one request (ERROR .. QZ), HELD .. REGIONS
-// in another, then STATUS, then ACK_ID, and the heartbeat. A PLC whose registers end at QZ (a
-// map programmed before HELD .. REGIONS) answers that second write with exception 02: it is
-// warned about once per connection and not written again there; the rest runs as before. A PLC
+// in another where plc.write_held is set, then STATUS, then ACK_ID, and the heartbeat. A PLC that
+// answers that second write with an exception (its registers end at QZ) is warned about once
+// per connection and not written there again; the rest runs as before. A PLC
 // that cannot be reached is retried with a backoff doubling up to plc.reconnect_max_ms (logged);
 // writes still owed are made once the link is back, and the heartbeat moving again tells the PLC
 // side the link is up.
@@ -49,7 +49,7 @@ class PlcClientLink : public PlcLink {
   std::uint16_t last_req_id_ = 0;
   std::uint16_t image_[reg::kSize] = {};
   bool owe_block_ = false, owe_status_ = false, owe_ack_ = false, owe_heartbeat_ = false;
-  bool plc_holds_held_ = true;  // the PLC has registers for HELD .. REGIONS (this connection)
+  bool plc_holds_held_ = false;  // HELD .. REGIONS are written (plc.write_held, this connection)
   int backoff_ms_ = 100;
   long reconnects_ = 0;
   Clock::time_point next_attempt_{}, next_poll_{};

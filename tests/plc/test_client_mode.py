@@ -54,7 +54,7 @@ class PlcSide:
 class ClientMode(unittest.TestCase):
     def test_poll_and_reconnect(self):
         plc_proc = start_plc()
-        svc = Service(BINARY, PORT, mode="client", extra_toml="", seed=7)
+        svc = Service(BINARY, PORT, mode="client", extra_toml="", seed=7, plc_toml="write_held = true")
         try:
             plc = PlcSide()
             regs = plc.command(LOCATE, 1)
@@ -75,7 +75,8 @@ class ClientMode(unittest.TestCase):
             time.sleep(1.5)
             self.assertIsNone(svc.proc.poll(), "the service keeps running without its PLC")
             # ... and comes back (a restarted PLC: its registers start from zero again), programmed
-            # for the map without HELD .. REGIONS: the service says so once and runs as before.
+            # for the map without HELD .. REGIONS (plc.write_held set all the same): the service says
+            # so once and runs as before.
             plc_proc = start_plc(POSE_END)
             plc = PlcSide()
             end = time.time() + 15
@@ -90,7 +91,27 @@ class ClientMode(unittest.TestCase):
             self.assertIn(regs[STATUS], (DONE_OK, DONE_NONE))
             plc.c.close()
             self.assertIn("lost", svc.output())
-            self.assertEqual(svc.output().count("has no registers 42..44"), 1, svc.output())
+            self.assertEqual(svc.output().count("refused registers 42..44"), 1, svc.output())
+        finally:
+            code = svc.stop()
+            plc_proc.kill()
+            plc_proc.wait()
+        self.assertEqual(code, 0, svc.output())
+
+    def test_registers_beyond_qz_left_alone_by_default(self):
+        """Without plc.write_held a PLC block programmed for 0..41 is never written beyond it, however
+        large the PLC's area: its registers 42..44 keep what the PLC holds there."""
+        plc_proc = start_plc()
+        svc = Service(BINARY, PORT, mode="client", extra_toml="", seed=7)
+        try:
+            plc = PlcSide()
+            for req_id in (1, 2, 3):
+                regs = plc.command(LOCATE, req_id)
+                if regs[STATUS] == DONE_OK:  # a pose, so REGIONS would be at least 1 if written
+                    break
+            self.assertEqual(regs[STATUS], DONE_OK)
+            self.assertEqual(regs[HELD:SIZE], [0, 0, 0])
+            plc.c.close()
         finally:
             code = svc.stop()
             plc_proc.kill()
