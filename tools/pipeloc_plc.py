@@ -31,10 +31,12 @@ def held_why(bits):
     return [name for k, name in enumerate(HELD_WHY_NAMES) if bits & (1 << k)]
 
 
-def pipes_held(regs):
-    """With DONE_NONE: the LOCATE held poses back or found regions, so the bin still holds pipes
-    the cell cannot pick as they lie (shake it); False: it showed none (refill it). REGISTERS.md."""
-    return regs[HELD] > 0 or regs[REGIONS] > 0
+def what_is_left(regs):
+    """With DONE_NONE, what REGISTERS.md's "What a DONE_NONE says" reads into HELD and REGIONS:
+    "held" (poses held back: pipes the cell cannot pick as they lie, shake the bin), "regions"
+    (pipe-like regions, none confirmed: shake once where the empty bin gives none, then refill) or
+    "none" (no pipe seen: refill)."""
+    return "held" if regs[HELD] > 0 else "regions" if regs[REGIONS] > 0 else "none"
 
 
 def rot_zyx(rx, ry, rz):
