@@ -539,12 +539,11 @@ class GripperTakesNothing : public FrameSource {
 };
 
 // What a cell whose gripper takes nothing is handed out in up to `locates` LOCATEs: the pipe each
-// DONE_OK's pose lies on (-1: none within 10 mm, a wrong pose), the last status, and how many
+// DONE_OK's pose lies on (-1: none within 10 mm, a wrong pose), the last result, and how many
 // poses the last LOCATE withheld as tried.
 struct PicksTakingNothing {
   std::vector<int> pipes;
-  reg::Status last = reg::Status::ready;
-  reg::Result last_result;
+  reg::Result last;
   int tried = 0;
   std::size_t pipes_left = 0;
 };
@@ -559,8 +558,7 @@ PicksTakingNothing handed_out_taking_nothing(const PipeModel& model, const AppCo
   PicksTakingNothing out;
   for (int cycle = 1; cycle <= locates; ++cycle) {
     const reg::Result& r = service.run(1, std::uint16_t(cycle), Clock::now());
-    out.last = r.status;
-    out.last_result = r;
+    out.last = r;
     out.tried = service.record().withheld[std::size_t(withheld_index(kWithheldTookNothing))];
     if (r.status != reg::Status::done_ok) break;
     out.pipes.push_back(nearest_pipe(gripper->sim(), vertices, symmetries, *service.presented(), 10.0));
@@ -572,16 +570,16 @@ PicksTakingNothing handed_out_taking_nothing(const PipeModel& model, const AppCo
 }
 
 void expect_each_pipe_handed_out_once(const PicksTakingNothing& h) {
-  EXPECT_EQ(h.last, reg::Status::done_none);
+  EXPECT_EQ(h.last.status, reg::Status::done_none);
   ASSERT_GE(h.pipes.size(), 1u);
   std::vector<int> once = h.pipes;
   std::sort(once.begin(), once.end());
   EXPECT_EQ(std::unique(once.begin(), once.end()), once.end()) << "a pipe handed out twice";
   EXPECT_GE(h.tried, 1);  // the last LOCATE found them again and says why they are withheld
   // ... and so do its registers: the PLC reads a bin with pipes held back, not an empty one.
-  EXPECT_GE(h.last_result.held, h.tried);
-  EXPECT_TRUE(h.last_result.held_why & kWithheldTookNothing) << h.last_result.held_why;
-  EXPECT_GE(h.last_result.regions, 1);
+  EXPECT_GE(h.last.held, h.tried);
+  EXPECT_TRUE(h.last.held_why & kWithheldTookNothing) << h.last.held_why;
+  EXPECT_GE(h.last.regions, 1);
 }
 
 // A pose whose pick left the bin as it was is not handed out again while it stays so
@@ -598,7 +596,7 @@ TEST(Service, APoseWhosePickTookNothingIsNotHandedOutAgain) {
     if (withhold) {
       expect_each_pipe_handed_out_once(h);
     } else {
-      EXPECT_EQ(h.last, reg::Status::done_ok);
+      EXPECT_EQ(h.last.status, reg::Status::done_ok);
       EXPECT_EQ(h.pipes.size(), 6u);
       EXPECT_EQ(h.tried, 0);
     }

@@ -2,10 +2,10 @@
 // reads CMD and REQ_ID; it writes the result block in one request (ERROR .. QZ), HELD .. REGIONS
 // in another where plc.write_held is set, then STATUS, then ACK_ID, and the heartbeat. A PLC that
 // answers that second write with an exception (its registers end at QZ) is warned about once
-// per connection and not written there again; the rest runs as before. A PLC
-// that cannot be reached is retried with a backoff doubling up to plc.reconnect_max_ms (logged);
-// writes still owed are made once the link is back, and the heartbeat moving again tells the PLC
-// side the link is up.
+// per connection and not written there again; the rest runs as before. A PLC that cannot be
+// reached is retried with a backoff doubling up to plc.reconnect_max_ms (logged); writes still
+// owed are made once the link is back, and the heartbeat moving again tells the PLC side the link
+// is up.
 #pragma once
 
 #include <cstdint>
