@@ -532,6 +532,7 @@ class GripperTakesNothing : public FrameSource {
   GrabStatus grab(Clock::time_point after, Clock::time_point deadline, Frame* out) override {
     return sim_.grab(after, deadline, out);
   }
+  void found_none() override { sim_.found_none(); }  // the shaker, if configured, still shakes
   const SimSource& sim() const { return sim_; }
 
  private:
@@ -768,6 +769,55 @@ TEST(Service, LocatesWithoutAPickKeepTheirLastFramesToLocateAgain) {
   ASSERT_EQ(back.height, frame.depth_mm.height);
   EXPECT_EQ(worst_difference(back.pixels, frame.depth_mm.pixels), 0.0);
   EXPECT_EQ(png_width(overlay[0]), frame.depth_mm.width);  // the overlay is a PNG of the frame's size
+}
+
+// A simulated cell with a shaker (source.sim.shake_after_none): after a DONE_NONE, the pipes left
+// are dropped into the bin again, as many, under the same camera, and picks go on. A gripper that
+// takes nothing stops its bin on a DONE_NONE, every pipe held back as tried; shaken, they lie
+// elsewhere and are handed out again. Without the shaker, or shutting down, the bin stays as it
+// was. The truth file counts the bin's shakes (tools/zoo --shakes counts them from it).
+TEST(Service, ABinShakenAfterADoneNoneIsPickedAgain) {
+  for (const bool shaker : {false, true}) {
+    SCOPED_TRACE(shaker ? "shaker" : "no shaker");
+    test::TempDir dir;
+    AppConfig cfg = bin_to_clear(dir, 3, 21);
+    cfg.source.sim.shake_after_none = shaker;
+    cfg.source.sim.truth_file = dir.file("truth.jsonl");
+    auto src = std::make_unique<GripperTakesNothing>(sbend(), cfg.source.sim);
+    const GripperTakesNothing* gripper = src.get();
+    Service service(cfg, sbend(), std::move(src));
+    std::uint16_t cycle = 0;
+    reg::Status status = reg::Status::done_ok;
+    while (cycle < 10 && (status = service.run(1, ++cycle, Clock::now()).status) == reg::Status::done_ok)
+      service.after_publish();  // the robot goes there and takes nothing
+    ASSERT_EQ(status, reg::Status::done_none) << "cycle " << cycle;
+    const std::vector<Pose> before = gripper->sim().pipes_in_camera();
+    const Pose camera_before = *service.frame().camera.world_to_cam;
+    service.after_publish(true);  // shutting down: the bin stays as it is
+    EXPECT_EQ(gripper->sim().pipes_in_camera()[0].translation(), before[0].translation());
+    service.after_publish();  // the DONE_NONE the shaker acts on
+    EXPECT_EQ(service.run(2, ++cycle, Clock::now()).error, reg::Error::no_further_result);  // NEXT: no frame
+    service.after_publish();
+    const reg::Result& r = service.run(1, ++cycle, Clock::now());
+    const std::vector<Pose> after = gripper->sim().pipes_in_camera();
+    ASSERT_EQ(after.size(), before.size());
+    ASSERT_EQ(after.size(), 3u);  // the gripper took none
+    int moved = 0;
+    for (std::size_t i = 0; i < after.size(); ++i)
+      moved += (after[i].translation() - before[i].translation()).norm() > 1.0;
+    EXPECT_TRUE(service.frame().camera.world_to_cam->isApprox(camera_before));
+    const std::string truth = test::read_text(cfg.source.sim.truth_file);
+    const nlohmann::json last = nlohmann::json::parse(truth.substr(truth.rfind('\n', truth.size() - 2) + 1));
+    if (shaker) {
+      EXPECT_EQ(moved, 3);
+      EXPECT_EQ(r.status, reg::Status::done_ok);
+      EXPECT_EQ(last["shakes"].get<int>(), 1);
+    } else {
+      EXPECT_EQ(moved, 0);
+      EXPECT_EQ(r.status, reg::Status::done_none);
+      EXPECT_EQ(last["shakes"].get<int>(), 0);
+    }
+  }
 }
 
 // CLEAR_ERROR clears the error only: the poses of the last LOCATE stay, and NEXT after it

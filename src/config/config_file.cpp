@@ -328,6 +328,7 @@ void read_source(const std::string& file, const toml::table* t, std::vector<std:
   sim.boolean("refill", &c->sim.refill);
   sim.integer("refill_after_frames_without_pick", &c->sim.refill_after_frames_without_pick, 0, 1000000,
               "frames (0: never)");
+  sim.boolean("shake_after_none", &c->sim.shake_after_none);
   sim.text("truth_file", &c->sim.truth_file);
   sim.finish();
   if (c->sim.camera_height_min_mm > c->sim.camera_height_max_mm)

@@ -33,6 +33,7 @@ struct SimSourceConfig {
   std::string sensor = "kinect";  // kinect (structured light) | stereo (active stereo, RealSense D4xx)
   bool refill = true;             // a new bin when the last pipe has been picked
   int refill_after_frames_without_pick = 0;  // ... or after this many frames in a row without one (0: never)
+  bool shake_after_none = false;  // a LOCATE after a DONE_NONE finds the pipes left dropped again (a shaker)
   std::string truth_file;  // if set: one JSON line per frame with every pipe's true pose (tests, demo)
 };
 

@@ -41,6 +41,9 @@ class FrameSource {
   virtual GrabStatus grab(Clock::time_point after, Clock::time_point deadline, Frame* out) = 0;
   // The robot took the pipe handed out at this pose (model -> camera of the last frame).
   virtual void picked(const Pose& /*model_to_cam*/) {}
+  // The last LOCATE handed out no pose (DONE_NONE): a simulated cell may shake its bin before
+  // the next frame.
+  virtual void found_none() {}
   // One line for the start-up log.
   virtual std::string describe() const = 0;
 };

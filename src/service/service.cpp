@@ -399,7 +399,10 @@ void Service::after_publish(bool shutting_down) {
   warn_unresolved();
   write_overlays();
   if (held_pick_.took_nothing) keep_took_nothing_frame();
-  if (!pick_pending_ || shutting_down) return;
+  if (shutting_down) return;
+  if (record_.command == std::uint16_t(reg::Command::locate) && result_.status == reg::Status::done_none)
+    source_->found_none();
+  if (!pick_pending_) return;
   pick_pending_ = false;
   hold_pick();
   if (const Pose* p = presented()) source_->picked(*p);

@@ -48,8 +48,9 @@ class Service {
   // integrator's picture of the frame is written, every status.overlay_every LOCATEs it goes to
   // the status board, a LOCATE that handed out no pose keeps its frame (log.no_pick_frames), a
   // pick that took nothing keeps the frame it was found in (log.took_nothing_frames), and the
-  // simulated bin loses the pipe handed out. Shutting down, the records are still written (the
-  // last LOCATE before a stop is often the one that stood still) but the bin stays as it is.
+  // simulated bin loses the pipe handed out (after a DONE_NONE, is shaken if so configured).
+  // Shutting down, the records are still written (the last LOCATE before a stop is often the one
+  // that stood still) but the bin stays as it is.
   void after_publish(bool shutting_down = false);
   // Stops a running cycle at its next check (shutdown).
   void cancel_cycles(const std::atomic<bool>* flag) {

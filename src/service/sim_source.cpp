@@ -47,11 +47,13 @@ SimSource::~SimSource() {
 }
 
 void SimSource::write_truth(std::uint64_t frame) {
-  // {"frame": N, "bin": B, "camera_height_mm": H, "model_to_cam": [[R row-major (9), t mm (3)], ...],
+  // {"frame": N, "bin": B, "shakes": shakes of this bin so far, "camera_height_mm": H,
+  //  "model_to_cam": [[R row-major (9), t mm (3)], ...],
   //  "in_view": [share of each pipe's surface in the sensor's view, ...],
   //  "covered": [share of each pipe's silhouette covered by the others, ...]}; fprintf allocates nothing.
-  std::fprintf(truth_, "{\"frame\":%llu,\"bin\":%d,\"camera_height_mm\":%.1f,\"model_to_cam\":[",
-               (unsigned long long)frame, bins_, camera_height_mm(world_to_cam_));
+  std::fprintf(truth_,
+               "{\"frame\":%llu,\"bin\":%d,\"shakes\":%d,\"camera_height_mm\":%.1f,\"model_to_cam\":[",
+               (unsigned long long)frame, bins_, shakes_, camera_height_mm(world_to_cam_));
   for (std::size_t i = 0; i < pile_.size(); ++i) {
     const Pose p = world_to_cam_ * pile_[i];
     std::fprintf(truth_, "%s[", i ? "," : "");
@@ -84,6 +86,20 @@ void SimSource::fill_bin() {
   pile_ = build_pile(model_, params_.pile, rng_);
   world_to_cam_ = draw_camera(params_, rng_);
   ++bins_;
+  shakes_ = 0;
+  render();
+}
+
+void SimSource::found_none() {
+  if (cfg_.shake_after_none) shake();
+}
+
+void SimSource::shake() {
+  if (pile_.empty()) return;
+  PileParams left = params_.pile;
+  left.pipes = int(pile_.size());
+  pile_ = build_pile(model_, left, rng_);
+  ++shakes_;
   render();
 }
 
@@ -155,12 +171,13 @@ std::string SimSource::describe() const {
   std::snprintf(
       text, sizeof text,
       "sim: %d pipes of %s per bin (%.0f x %.0f mm), seed %d, %s sensor %.0f-%.0f mm above the floor%s, "
-      "tilt up to %.1f deg, %dx%d, %s",
+      "tilt up to %.1f deg, %dx%d, %s%s",
       cfg_.pipes, model_.source.c_str(), params_.pile.bin.inner_x_mm, params_.pile.bin.inner_y_mm, cfg_.seed,
       cfg_.sensor.c_str(), params_.camera_height_min_mm, params_.camera_height_max_mm,
       params_.camera_height_min_mm > cfg_.camera_height_min_mm ? " (raised to see the whole bin)" : "",
       cfg_.tilt_deg, params_.intrinsics.width, params_.intrinsics.height,
-      cfg_.refill ? "refilled when empty" : "not refilled");
+      cfg_.refill ? "refilled when empty" : "not refilled",
+      cfg_.shake_after_none ? ", shaken after each DONE_NONE" : "");
   return text;
 }
 

@@ -1,7 +1,10 @@
 // The embedded default source: the project's simulator. It keeps a pile in a bin, renders it
 // once per change of the pile and draws fresh sensor noise for every frame. A pipe handed out
 // and picked is taken out of the bin, so a run empties a bin as a real cell would; an empty
-// bin is refilled with a new pile (source.sim.refill).
+// bin is refilled with a new pile (source.sim.refill). With source.sim.shake_after_none, the bin
+// is shaken after each DONE_NONE, as the pick after a DONE_OK (outside the cycle): the pipes left
+// dropped into it again, a new pile of as many under the same camera (a real shaker moves them
+// less: this is its best case).
 #pragma once
 
 #include <cstdio>
@@ -21,6 +24,7 @@ class SimSource : public FrameSource {
   const Intrinsics& intrinsics() const override { return params_.intrinsics; }
   GrabStatus grab(Clock::time_point after, Clock::time_point deadline, Frame* out) override;
   void picked(const Pose& model_to_cam) override;
+  void found_none() override;
   std::string describe() const override;
 
   // Ground truth for tests and the demo: the pipes still in the bin, model -> camera.
@@ -29,6 +33,7 @@ class SimSource : public FrameSource {
 
  private:
   void fill_bin();
+  void shake();
   void render();
   void write_truth(std::uint64_t frame);
 
@@ -48,6 +53,7 @@ class SimSource : public FrameSource {
   std::uint64_t sequence_ = 0;
   int bins_ = 0;
   int frames_without_pick_ = 0;
+  int shakes_ = 0;  // of this bin
   std::FILE* truth_ = nullptr;
 };
 

@@ -81,6 +81,25 @@ assert not z["failed"], z["failed"]
 assert len(chosen) == 2 and chosen[0] == taken, chosen
 PY
 grep -q "Address already in use" "$work/zoo/shapes/20-3D/log.txt" || fail "a taken port: the service did not say so"
+# The shaker: the same bin, the stand-in PLC shaking it where the DONE_NONE's registers say so. The
+# figures at the first DONE_NONE are the run's above; the s_ ones count on to the last LOCATE.
+"$here/tools/zoo" --bin "$bin" --out "$work/zoo" --shapes 20 --images 2 --reuse --shakes 2 \
+  --json "$work/shake.json" > "$work/zoo10.txt" 2>&1 || fail "--shakes 2 failed: $(tail -20 "$work/zoo10.txt")"
+grep -q 'shake_after_none = true' "$work/zoo/shapes/20-3D/clear.toml" || fail "--shakes 2: not passed to serve"
+grep -q '^with the shaker' "$work/zoo10.txt" || fail "--shakes 2: no shaker line: $(tail -8 "$work/zoo10.txt")"
+python3 - "$work/zoo/port.json" "$work/shake.json" <<'PY' || fail "--shakes 2: figures: $(tail -8 "$work/zoo10.txt")"
+import json, sys
+(a,), (b,) = ([r["clear"] for r in json.load(open(f))["rows"]] for f in sys.argv[1:])
+for k in ("pipes", "taken", "seen", "seen_taken", "free_left", "wrong", "took_nothing", "emptied", "locates", "picks",
+          "stop", "stops_free", "stops_empty"):
+    assert a[k] == b[k], (k, a[k], b[k])
+assert a["shakes"] == 0 and a["s_taken"] == a["taken"] and a["s_wrong"] == a["wrong"], a
+assert 0 <= b["shakes"] <= 2 * b["pipes"] and b["taken"] <= b["s_taken"] <= b["pipes"], b
+assert b["s_wrong"] >= b["wrong"] and b["s_locates"] >= b["locates"] + b["shakes"], b
+assert b["s_emptied"] == (b["s_taken"] == b["pipes"]), b
+PY
+if "$here/tools/zoo" --bin "$bin" --out "$work/zoo" --shakes 21 > "$work/zoo11.txt" 2>&1; then fail "--shakes 21 accepted"; fi
+grep -q -- '--shakes 21' "$work/zoo11.txt" || fail "--shakes 21: no message naming it: $(cat "$work/zoo11.txt")"
 # A second run on the same folder re-uses the STLs and datasets.
 "$here/tools/zoo" --bin "$bin" --out "$work/zoo" --shapes 15 --images 2 --reuse --no-clear > "$work/zoo2.txt" 2>&1 ||
   fail "--reuse run failed: $(tail -20 "$work/zoo2.txt")"
