@@ -400,8 +400,7 @@ void Service::after_publish(bool shutting_down) {
   write_overlays();
   if (held_pick_.took_nothing) keep_took_nothing_frame();
   if (shutting_down) return;
-  if (record_.command == std::uint16_t(reg::Command::locate) && result_.status == reg::Status::done_none)
-    source_->found_none();
+  if (result_.status == reg::Status::done_none) source_->found_none();  // only a LOCATE answers it
   if (!pick_pending_) return;
   pick_pending_ = false;
   hold_pick();
