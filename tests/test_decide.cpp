@@ -433,9 +433,9 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
          return e;
        }(),
        true, CandidateOutcome::accepted, false, true, 0.9f},
-      {"ends read, none pinned, a twentieth out of the view",
-       ends_read(judged(outside_view(seen(950, 0, 0), 0.05f)), 0, 0, 0, 0), true, CandidateOutcome::accepted,
-       false, true, 0.9025f},
+      {"ends read, none pinned, a twentieth out of the view at one end",
+       ends_out_of_view(ends_read(judged(outside_view(seen(950, 0, 0), 0.05f)), 0, 0, 0, 0), 1), true,
+       CandidateOutcome::accepted, false, true, 0.9025f},
       // Going on beyond one end, wholly in view: placed only where the other is seen ending outright
       // (a thin U laid across two pipes pins an end past a hidden tip).
       {"ends read, going on beyond one, the other seen ending",
@@ -443,8 +443,9 @@ TEST(Decide, EveryOutcomeFromItsEvidence) {
        true, 0.9f},
       {"ends read, going on beyond one, the other pinned but not seen ending",
        ends_read(judged(seen(900, 0, 0)), 1, 1, 0, 0), true, CandidateOutcome::accepted, false, false, 0.9f},
-      {"the same, a twentieth out of the view", ends_read(judged(outside_view(seen(950, 0, 0), 0.05f)), 1, 1, 0, 0),
-       true, CandidateOutcome::accepted, false, true, 0.9025f},
+      {"the same, a twentieth of its middle out of the view",
+       ends_read(judged(outside_view(seen(950, 0, 0), 0.05f)), 1, 1, 0, 0), true, CandidateOutcome::accepted, false,
+       false, 0.9025f},
       {"a tenth under a pipe, a tenth out of the view", judged(outside_view(seen(900, 0, 100), 0.1f)), true,
        CandidateOutcome::accepted, false, true, 0.729f},
       {"a twentieth out of the view", judged(outside_view(seen(900, 0, 0), 0.05f)), true,
@@ -746,6 +747,31 @@ TEST(Decide, APipeShowingBothEndsEndingMayReachFurtherOutOfTheView) {
   LocateConfig paper;
   use_paper_search(&paper);  // the paper's pipeline: off
   EXPECT_NE(decide(out_of_view(0.65f, 2, 2), paper).withheld & kWithheldPartSeen, 0u);
+}
+
+// A pipe that does not slide along itself is placed only where the image shows one of its ends
+// (pinned, the tube going on beyond neither). Whether it lies wholly in the view is read at its
+// ends: with both in the view, a part of its middle out of it does not excuse them; with one out
+// of the view, the bends in view may place it.
+TEST(Decide, APipeWithBothEndsInTheViewIsPlacedOnlyByOneShown) {
+  LocateConfig cfg;
+  const auto middle_out = [](int ends_out, int pinned, int continued) {
+    return ends_out_of_view(ends_read(judged(outside_view(seen(950, 0, 0), 0.05f)), pinned, continued, 0, 0),
+                            ends_out);
+  };
+  const auto withheld_no_end = [&](const Evidence& e, const LocateConfig& c) {
+    return (decide(e, c).withheld & kWithheldNoEnd) != 0;
+  };
+  EXPECT_TRUE(withheld_no_end(middle_out(0, 0, 0), cfg));   // both ends in view, neither shown
+  EXPECT_TRUE(withheld_no_end(middle_out(0, 1, 1), cfg));   // one pinned, the tube going on beyond the other
+  EXPECT_FALSE(withheld_no_end(middle_out(0, 1, 0), cfg));  // one pinned
+  EXPECT_FALSE(withheld_no_end(middle_out(1, 0, 0), cfg));  // one end out of the view
+  EXPECT_TRUE(decide(middle_out(0, 1, 0), cfg).pickable);
+  cfg.end_shown_where_both_in_view = false;  // off: any part out of the view excuses the ends
+  EXPECT_FALSE(withheld_no_end(middle_out(0, 0, 0), cfg));
+  LocateConfig paper;
+  use_paper_search(&paper);  // the paper's pipeline: off
+  EXPECT_FALSE(withheld_no_end(middle_out(0, 0, 0), paper));
 }
 
 // A pose is handed out only where the sensor resolves the tube: its relief (0.223 R, RMS) over the

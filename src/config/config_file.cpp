@@ -275,6 +275,7 @@ void read_locate(Section& s, LocateConfig* c) {
   s.boolean("follow_slides_to_ends", &c->follow_slides_to_ends);
   s.boolean("pin_part_in_view_by_ends", &c->pin_part_in_view_by_ends);
   s.boolean("end_unread_as_out_of_view", &c->end_unread_as_out_of_view);
+  s.boolean("end_shown_where_both_in_view", &c->end_shown_where_both_in_view);
   s.integer("max_candidates", &c->max_candidates, 1, 256, "regions");
   s.integer("max_results", &c->max_results, 0, 256, "poses (0: every pose found)");
   s.integer("threads", &c->threads, 1, 64, "threads");

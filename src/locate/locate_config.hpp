@@ -232,6 +232,9 @@ struct LocateConfig {
                                           // out of the view at one end, whose end in view the image
                                           // neither pins nor shows going on, is placed by the bends
                                           // in view as where both ends lie out of it
+  bool end_shown_where_both_in_view = true;  // a pose of a pipe that does not slide with both ends
+                                             // in the view is placed only where the image shows one
+                                             // of them, though some of its middle lies out of it
 
   // The paper's comparison: ICP on points sampled from the whole visible surface instead of the
   // Z-ridge (eval-bop --match surface).
@@ -276,6 +279,7 @@ inline void use_paper_search(LocateConfig* c) {
   c->follow_slides_to_ends = false;
   c->pin_part_in_view_by_ends = false;
   c->end_unread_as_out_of_view = false;
+  c->end_shown_where_both_in_view = false;
   c->verify_max_outside_view_ends_seen = 0;
   c->ends_read_further = false;
   c->ends_read_slanted = false;
