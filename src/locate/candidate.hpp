@@ -74,7 +74,8 @@ enum Withheld : unsigned {
   kWithheldCovered = 1u << 1,       // more than verify_max_occluded of it under something in front
   kWithheldPartSeen = 1u << 2,      // too much of it out of the view, or too little confirmed
   kWithheldGoesOn = 1u << 3,        // the tube goes on beyond both ends: the pipe lies elsewhere
-  kWithheldNoEnd = 1u << 4,         // wholly in view, and no end seen ending
+  kWithheldNoEnd = 1u << 4,         // both ends in view, neither shown (pinned, the tube going
+                                    // on beyond neither)
   kWithheldSecondSearch = 1u << 5,  // a second search's pose the image confirms too little
   kWithheldUnresolved = 1u << 6,    // the sensor does not resolve the tube (pick_min_relief_sigmas)
   kWithheldTookNothing = 1u << 7,   // handed out before, and its pick left the bin unchanged there
