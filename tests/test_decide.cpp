@@ -86,7 +86,8 @@ Evidence pinned_further(Evidence e, int n) {
   return e;
 }
 
-// Of the best's ends, `n` whose tip lies outside the sensor's view: the image cannot show them.
+// Of the best's ends, `n` whose tip, or the way on just beyond it, lies outside the sensor's view:
+// the image cannot show them.
 Evidence ends_out_of_view(Evidence e, int n) {
   e.best.ends_out_of_view = n;
   return e;

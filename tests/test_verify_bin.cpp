@@ -368,8 +368,10 @@ TEST(BinAwareVerification, AnEndBesideTheSensorsShadowIsSeenEndingButForIt) {
 // An end whose tip lies outside the sensor's view (beyond the image, or in the band an active
 // sensor does not read) is counted as such: no image can show it ending (decide() does not ask
 // for it where both ends lie there), and what lies beyond it neither pins it nor shows it going on
-// (a coil's loop at the image's edge was pinned so, 82 mm from its pipe: 18-coil of seed 21).
-TEST(BinAwareVerification, AnEndWhoseTipLiesOutOfTheViewIsCountedSo) {
+// (a coil's loop at the image's edge was pinned so, 82 mm from its pipe: 18-coil of seed 21). So
+// is an end whose tip lies just inside the view, the way on beyond it outside: what lies there
+// does not count either.
+TEST(BinAwareVerification, AnEndTheViewDoesNotShowBeyondIsCountedOutOfIt) {
   TubeOnFloor tube;
   const Intrinsics& k = tube.s.camera.intrinsics;
   const std::vector<Eigen::Vector3f>& line = tube.lm.centreline_points;
@@ -389,6 +391,14 @@ TEST(BinAwareVerification, AnEndWhoseTipLiesOutOfTheViewIsCountedSo) {
   const PixelBox past_one{left + 2, 0, k.width - 1, k.height - 1};
   EXPECT_EQ(ends(&past_one).ends_out_of_view, 1);
   EXPECT_EQ(ends(&past_one).ends_pinned, 1);
+  // The nearer probe beyond the tip (0.75 D, about 10 px here) falls outside a view whose edge lies
+  // a pixel beyond the tip, not outside one whose edge lies 16 px beyond it.
+  const PixelBox tip_inside{left - 1, 0, k.width - 1, k.height - 1};
+  EXPECT_EQ(ends(&tip_inside).ends_out_of_view, 1);
+  EXPECT_EQ(ends(&tip_inside).ends_pinned, 1);
+  const PixelBox past_probes{left - 16, 0, k.width - 1, k.height - 1};
+  EXPECT_EQ(ends(&past_probes).ends_out_of_view, 0);
+  EXPECT_EQ(ends(&past_probes).ends_pinned, 2);
   const PixelBox between{left + 2, 0, right - 2, k.height - 1};
   EXPECT_EQ(ends(&between).ends_out_of_view, 2);
   EXPECT_EQ(ends(&between).ends_pinned, 0);

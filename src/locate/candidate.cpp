@@ -494,10 +494,11 @@ Decision decide(const Evidence& given, const LocateConfig& cfg) {
   // 14 of 30 showed neither end (a pipe model laid over a hose, a handle, a box's edge); on the
   // zoo no image loses its pick (docs/experiments.md). Not for a model without a centreline (a
   // hollow STL whose bore hides it): its ends are never read.
-  // Whether the pipe is wholly in the view is read at its ends: where both lie in it, a part of its
-  // middle out of the view does not excuse them (end_shown_where_both_in_view; a coil's twin, 1 %
-  // of it out of the view, no end pinned, the tube going on beyond one, was handed out 47 mm off
-  // after a shake: six bins of every shape of the four draws, docs/experiments.md).
+  // Whether the pipe is wholly in the view is read at its ends: where both lie in it (and the way
+  // on just beyond each: judge_ends()), a part of its middle out of the view does not excuse them
+  // (end_shown_where_both_in_view; a coil's twin, 1 % of it out of the view, no end pinned, the
+  // tube going on beyond one, was handed out 47 mm off after a shake: six bins of every shape of
+  // the four draws, docs/experiments.md).
   // Where the tube goes on beyond one end, the other end must be seen ending outright: a pin read
   // past a hidden tip or on one probe does not outweigh it. Such poses laid a thin U or Z across
   // two pipes at 1.1-1.2 m, agreeing 0.92-0.93: 3 wrong picks of 374, where a pose within 5 mm

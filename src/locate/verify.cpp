@@ -198,16 +198,30 @@ void judge_ends(const std::vector<Eigen::Vector3f>& centreline, float d, const P
     // The way out of the tube at this end: from the centreline point about D inside it.
     const int in = inward(d);
     const Eigen::Vector3f tip = r * centreline[end] + t;
-    const Eigen::Vector2d tip_px = k.project(tip.cast<double>());
-    const bool tip_in_view = tip.z() > 0 && in_view(seen, tip_px.x(), tip_px.y());
-    v->ends_out_of_view += !tip_in_view;
+    // Where the tube's surface around the centreline point `centre`, `surface_mm` from it, faces
+    // the camera.
+    const auto facing_of = [](const Eigen::Vector3f& centre, float surface_mm) {
+      return Eigen::Vector3f(centre - surface_mm * centre.normalized());
+    };
+    Eigen::Vector3f out = r * (centreline[end] - centreline[in]);
+    const bool way_out = out.norm() > 0.25f * d;
+    if (way_out) out.normalize();
+    // The end lies in the view where its tip does and so does the point its nearer probe reads
+    // (the surface a tube going on would show there); else it counts as out of the view.
+    const auto seen_at = [&](const Eigen::Vector3f& p) {
+      const Eigen::Vector2d px = k.project(p.cast<double>());
+      return p.z() > 0 && in_view(seen, px.x(), px.y());
+    };
+    const bool end_in_view =
+        seen_at(tip) && (!way_out || seen_at(facing_of(tip + kEndProbesOfD[0] * d * out, 0.5f * d)));
+    v->ends_out_of_view += !end_in_view;
     // What lies beyond a tip the image cannot show neither pins the end nor shows it going on: a
     // coil's loop at the image's edge, both tips out of the view, was pinned by the floor beyond
-    // one and handed out 82 mm from its pipe (18-coil of seed 21, six bins).
-    if (!tip_in_view) continue;
-    Eigen::Vector3f out = r * (centreline[end] - centreline[in]);
-    if (!(out.norm() > 0.25f * d)) continue;
-    out.normalize();
+    // one and handed out 82 mm from its pipe (18-coil of seed 21, six bins). Nor does what lies
+    // beyond a tip just inside the view's edge, its way on out of the view (counted in the view,
+    // such ends withheld pipes as NO END: twelve bins of every shape of the four draws take 15
+    // more pipes by the first DONE_NONE, docs/experiments.md).
+    if (!end_in_view || !way_out) continue;
     // How far from the centreline the tube shows the camera its surface at its tip: D / 2, or with
     // slanted, D / 2 over the cosine of its slant to the image there. (Beyond the tip, where a tube
     // going on would lie, it is read D / 2 from the line: a pin needs the surface there lower than
@@ -215,12 +229,8 @@ void judge_ends(const std::vector<Eigen::Vector3f>& centreline, float d, const P
     const float sine =
         how.slanted && tip.z() > 0 ? std::min(std::abs(out.dot(tip.normalized())), 1.0f) : 0.0f;
     const float tip_surface_mm = 0.5f * d / std::sqrt(std::max(1.0f - sine * sine, kLeastCosineSquared));
-    // Where the tube's surface around the centreline point `centre`, `surface_mm` from it, faces
-    // the camera ...
-    const auto facing_of = [](const Eigen::Vector3f& centre, float surface_mm) {
-      return Eigen::Vector3f(centre - surface_mm * centre.normalized());
-    };
-    // ... the depth measured there, and that surface's depth; no reading: 0.
+    // The depth measured where the surface around `centre` faces the camera, and that surface's
+    // depth; no reading: 0.
     const auto probe_at = [&](const Eigen::Vector3f& centre, float surface_mm, float* facing_z) {
       if (!(centre.z() > 0)) return 0.0f;
       const Eigen::Vector3f facing = facing_of(centre, surface_mm);

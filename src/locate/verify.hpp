@@ -72,7 +72,8 @@ struct Verification {
   // ... and those pinned by the probe read further along the bend alone (EndReading::read_further):
   // nothing was read between the tip and it, where the tube may go on.
   int ends_pinned_further = 0;
-  // ... and the ends whose tip lies outside the sensor's view: the image cannot show them.
+  // ... and the ends whose tip, or what lies just beyond it, is outside the sensor's view: the
+  // image cannot show them.
   int ends_out_of_view = 0;
   // The part of the tube in the sensor's view slides along the pipe (judge_part_in_view): only an
   // end the image shows places the pose along it.
@@ -111,8 +112,8 @@ Verification verify_pose(const Mesh& mesh, Winding winding, const Pose& model_to
 // continued tube would show the camera is compared with the depth measured there: farther than
 // tolerance_mm is an end the image pins, within it a tube going on. Fills ends_pinned,
 // ends_continued, ends_seen_ending and ends_pinned_further of *v, read as `how` says, and
-// ends_out_of_view: the ends whose tip lies outside `view` (the sensor's view, read_view(); the
-// whole image where null).
+// ends_out_of_view: the ends whose tip, or the nearer probe beyond it, lies outside `view` (the
+// sensor's view, read_view(); the whole image where null).
 struct EndReading {
   // An end is pinned only where nothing lies in front of the tube at its tip and half a diameter
   // inside it: an end hidden under another pipe is not shown ending there, whatever lies beyond.
