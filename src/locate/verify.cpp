@@ -45,6 +45,12 @@ bool in_view(const PixelBox& view, double x, double y) {
   return x >= view.x0 && y >= view.y0 && x < view.x1 + 1 && y < view.y1 + 1;
 }
 
+// The point p (camera frame) lies in front of the camera and projects into `view`.
+bool point_in_view(const PixelBox& view, const Intrinsics& k, const Eigen::Vector3d& p) {
+  const Eigen::Vector2d px = k.project(p);
+  return p.z() > 0 && in_view(view, px.x(), px.y());
+}
+
 // Where the centreline, going on beyond its point `end` as it bends on the circle through the
 // points `in`, `mid` and `end`, lies `s_mm` beyond it (model frame; a straight line where the
 // three are (nearly) in line).
@@ -208,10 +214,7 @@ void judge_ends(const std::vector<Eigen::Vector3f>& centreline, float d, const P
     if (way_out) out.normalize();
     // The end lies in the view where its tip does and so does the point its nearer probe reads
     // (the surface a tube going on would show there); else it counts as out of the view.
-    const auto seen_at = [&](const Eigen::Vector3f& p) {
-      const Eigen::Vector2d px = k.project(p.cast<double>());
-      return p.z() > 0 && in_view(seen, px.x(), px.y());
-    };
+    const auto seen_at = [&](const Eigen::Vector3f& p) { return point_in_view(seen, k, p.cast<double>()); };
     const bool end_in_view =
         seen_at(tip) && (!way_out || seen_at(facing_of(tip + kEndProbesOfD[0] * d * out, 0.5f * d)));
     v->ends_out_of_view += !end_in_view;
@@ -338,8 +341,7 @@ void centreline_in_view(const std::vector<Eigen::Vector3f>& centreline, const Po
   double z_sum = 0;
   for (int i = 0; i < n; ++i) {
     const Eigen::Vector3d p = model_to_cam * centreline[std::size_t(i)].cast<double>();
-    const Eigen::Vector2d px = k.project(p);
-    if (!(p.z() > 0 && in_view(seen, px.x(), px.y()))) continue;
+    if (!point_in_view(seen, k, p)) continue;
     ++part->in_view, z_sum += p.z();
     if (i % part->stride == 0) part->index[std::size_t(part->count++)] = i;
   }
