@@ -291,7 +291,8 @@ TEST(BinAwareVerification, AnArcIsPlacedAlongItselfOnlyByAnEndTheImageShows) {
 // The straight tube on the floor, its ends read by judge_ends() at the true pose and at poses
 // slid along it. Slid less far than the first probe beyond an end reaches, both poses are read
 // beyond the same ends of the pipe: each has both ends pinned, so the ends do not tell them apart,
-// and ends_tell_apart() says so. Slid further, the tube goes on beyond one end of the slid pose.
+// and ends_tell_apart() says so; ends_shared() counts both ends shared. Slid further, the tube goes
+// on beyond one end of the slid pose; slid on by nearly its length, one end is shared.
 TEST(BinAwareVerification, EndsTellPosesApartOnlyWhereTheyLieBeyondTheFirstProbe) {
   TubeOnFloor tube;
   const std::vector<Eigen::Vector3f>& line = tube.lm.centreline_points;
@@ -314,15 +315,21 @@ TEST(BinAwareVerification, EndsTellPosesApartOnlyWhereTheyLieBeyondTheFirstProbe
     EXPECT_EQ(ends(slid).ends_pinned, 2);
     EXPECT_EQ(ends(slid).ends_continued, 0);
     EXPECT_FALSE(ends_tell_apart(line, d, truth, slid));
+    EXPECT_EQ(ends_shared(line, d, truth, slid), 2);
   }
   const Pose far_slid = pose_at(-75 + 1.2 * kTubeMm);
   EXPECT_EQ(ends(far_slid).ends_continued, 1);
   EXPECT_TRUE(ends_tell_apart(line, d, truth, far_slid));
+  EXPECT_EQ(ends_shared(line, d, truth, far_slid), 0);
+  // Slid on by nearly its length, one end lies where the other was: one end shared.
+  const double length = (line.back() - line.front()).norm();
+  EXPECT_EQ(ends_shared(line, d, truth, pose_at(-75 + length - 0.3 * kTubeMm)), 1);
   // Turned end for end about its middle, the tube's ends lie where they were: nothing to tell.
   Pose turned = truth;
   turned = truth * Eigen::Translation3d(75, 0, 0) * Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitZ()) *
            Eigen::Translation3d(-75, 0, 0);
   EXPECT_FALSE(ends_tell_apart(line, d, truth, turned));
+  EXPECT_EQ(ends_shared(line, d, truth, turned), 2);
 }
 
 // A raised end casts the sensor's shadow on the floor beyond it. Where the first probe beyond the

@@ -1093,26 +1093,31 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
         best = polished;
     }
   }
-  // Beyond the paper: a pose reaching out of the view, whose ends the image neither pins nor shows
-  // going on, is placed by the shape of its part in view alone; where another part of the pipe has
-  // that shape (an S's other bend), the pipe may lie with that part there, the rest elsewhere
+  // Beyond the paper: a pose reaching out of the view, no tube read going on beyond its ends, is
+  // placed by the shape of its part in view and the ends it pins; where another part of the pipe
+  // has that shape (an S's other bend), the pipe may lie with that part there, the rest elsewhere
   // (judge_other_parts). Each such pose (other_parts_in_view) is refined on the region, kept
   // unrefined where the image judges that better, and judged; it never takes the best's place.
   // Where it is confirmed about as well on the pixels the sensor read (what lies where nothing is
   // read, as what lies out of the view, speaks for neither), its ends show no worse and the
   // pixels telling the two apart do not show the best (as a rival's), the pose is not known. A
   // 42 mm S, one bend in view, was handed out 152 mm off: another S's other bend lay there, its
-  // rest in the view where the sensor read nothing (tools/zoo --seed 22, 11-S-asym). Only where
-  // no end is pinned: a U with both legs out of the view, its bend in view, or an arc, reads the
-  // same with another part there, and right picks were lost (docs/experiments.md). Judged on the
+  // rest in the view where the sensor read nothing (tools/zoo --seed 22, 11-S-asym). An end the
+  // pose pins speaks for it: the other part must show its ends as well (a U with both legs out of
+  // the view, its bend in view, or an arc, reads the same with another part there, and right
+  // picks were lost: docs/experiments.md). An end the two share is read by the same probes and
+  // speaks for neither: that S, its other bend on the bend in view and its end in view pinned,
+  // was handed out turned end for end, 491 mm off. Another part at both ends of a pinned pose is
+  // the pose moved less than the probes reach, no other placement (judged so, a straight tube half
+  // out of the view lost 11 of 90 picks; tools/zoo --seed 20, 01-straight). Judged on the
   // best as it stands here (slid, polished), and on a rival as good, which decide() may hand out
   // in its place: 42 % of a 934 mm Z out of the view, another stretch of it laid over its part in
   // view, was taken as the rival, never judged, 353 mm off (tools/zoo --seed 22, 13-Z, clearing).
   // The slides and the twins are judged above.
   bool cut_short = false;  // the deadline passed while another part was judged
   const auto other_part_unsure = [&](const PipeEstimate& found) {
-    if (!(cfg.judge_other_parts && found.check.outside_view > 0 && found.check.ends_pinned == 0 &&
-          found.check.ends_continued == 0 && !deadline.passed()))
+    if (!(cfg.judge_other_parts && found.check.outside_view > 0 && found.check.ends_continued == 0 &&
+          !deadline.passed()))
       return false;
     std::array<Pose, kMostOtherParts> motions;
     const int n = other_parts_in_view(lm.centreline_points, lm.centreline_step_mm, lm.tube_d_mm,
@@ -1134,7 +1139,12 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
           refine_and_check(other, found.ridge_cost_mm, buf->region_pts.data(), refine_count, true);
       if (pick_distance_mm(lm, e.model_to_bin, found.model_to_bin, ambiguity_mm) <= ambiguity_mm) continue;
       if (!as_good_where_read(e.check, found.check, cfg)) continue;
-      if (ends_shown(e.check) < ends_shown(found.check)) continue;  // its ends show it worse
+      // An end both share pins neither more than the other; one at both ends of a pinned pose is
+      // the pose itself, moved less than the probes reach.
+      const int shared = ends_shared(lm.centreline_points, lm.tube_d_mm, found.model_to_bin, e.model_to_bin);
+      if (found.check.ends_pinned > 0 && shared == 2) continue;
+      if (ends_shown(e.check) < ends_shown(found.check) - std::min(shared, found.check.ends_pinned))
+        continue;  // its ends show it worse
       if (cfg.tell_rivals_apart) {
         const TellingPixels told = telling_pixels(found, e);
         if (pixels_show(told.for_a, told.for_b)) continue;  // the image shows the best, not the other

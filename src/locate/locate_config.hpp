@@ -192,10 +192,11 @@ struct LocateConfig {
                                   // than this (the pick-correct tolerance): ambiguous ...
   bool tell_rolls_apart = true;   // ... unless, where the two differ, the image speaks for the found
                                   // pose and hardly for the turn (as tell_rivals_apart)
-  bool judge_other_parts = true;  // a pose reaching out of the view, no end pinned, none going on,
-                                  // put with another part of the pipe where its part in view is
-                                  // seen (an S's other bend): as good on the pixels read, ambiguous;
-                                  // the best, and a rival as good that may be handed out instead
+  bool judge_other_parts = true;  // a pose reaching out of the view, no end going on, put with
+                                  // another part of the pipe where its part in view is seen (an
+                                  // S's other bend): as good on the pixels read, its ends no worse
+                                  // (an end both lie at counts for neither), ambiguous; the best,
+                                  // and a rival as good that may be handed out instead
   // A pose further from the camera than where one pixel covers its near twin's spread everywhere
   // (twin_resolved_within_mm): ambiguous, whatever its pixels say.
   bool twin_beyond_resolution_ambiguous = true;

@@ -462,6 +462,19 @@ bool ends_tell_apart(const std::vector<Eigen::Vector3f>& centreline, float d, co
   return std::min(paired, swapped) > double(kEndProbesOfD[0] * d);
 }
 
+int ends_shared(const std::vector<Eigen::Vector3f>& centreline, float d, const Pose& a, const Pose& b) {
+  if (centreline.size() < 2) return 0;
+  const std::array<Eigen::Vector3d, 2> ends_b = {b * centreline.front().cast<double>(),
+                                                 b * centreline.back().cast<double>()};
+  int shared = 0;
+  for (const Eigen::Vector3f& end : {centreline.front(), centreline.back()}) {
+    const Eigen::Vector3d p = a * end.cast<double>();
+    shared += (p - ends_b[0]).norm() <= double(kEndProbesOfD[0] * d) ||
+              (p - ends_b[1]).norm() <= double(kEndProbesOfD[0] * d);
+  }
+  return shared;
+}
+
 TellingPixels tell_apart(const Image<float>& a_mm, const PixelBox& box_a, const Image<float>& b_mm,
                          const PixelBox& box_b, const Image<float>& depth, float tol) {
   TellingPixels out;

@@ -164,6 +164,9 @@ int other_parts_in_view(const std::vector<Eigen::Vector3f>& centreline, float st
 // D is then told from the pipe by the noise of one pixel (docs/experiments.md).
 bool ends_tell_apart(const std::vector<Eigen::Vector3f>& centreline, float d_mm, const Pose& a,
                      const Pose& b);
+// How many ends of pose a of a centreline (model frame, tube diameter d_mm) lie within the first
+// probe's reach of an end of pose b: what judge_ends reads at such an end speaks for both poses.
+int ends_shared(const std::vector<Eigen::Vector3f>& centreline, float d_mm, const Pose& a, const Pose& b);
 // Beyond the paper: two poses told apart by the image. Where their renders (depth in each box,
 // 0 where not drawn) differ by more than tolerance_mm, each pixel speaks for the pose whose
 // surface the sensor measured there, or against one it saw through; rims are left out (lateral
