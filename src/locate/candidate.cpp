@@ -1108,7 +1108,7 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
   // picks were lost: docs/experiments.md). An end the two share is read by the same probes and
   // speaks for neither: that S, its other bend on the bend in view and its end in view pinned,
   // was handed out turned end for end, 491 mm off. Another part at both ends of a pinned pose is
-  // the pose moved less than the probes reach, no other placement (judged so, a straight tube half
+  // the pose moved less than the probes' reach, no other placement (judged so, a straight tube half
   // out of the view lost 11 of 90 picks; tools/zoo --seed 20, 01-straight). Judged on the
   // best as it stands here (slid, polished), and on a rival as good, which decide() may hand out
   // in its place: 42 % of a 934 mm Z out of the view, another stretch of it laid over its part in
@@ -1140,7 +1140,7 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
       if (pick_distance_mm(lm, e.model_to_bin, found.model_to_bin, ambiguity_mm) <= ambiguity_mm) continue;
       if (!as_good_where_read(e.check, found.check, cfg)) continue;
       // An end both share pins neither more than the other; one at both ends of a pinned pose is
-      // the pose itself, moved less than the probes reach.
+      // the pose itself, moved less than the probes' reach.
       const int shared = ends_shared(lm.centreline_points, lm.tube_d_mm, found.model_to_bin, e.model_to_bin);
       if (found.check.ends_pinned > 0 && shared == 2) continue;
       if (ends_shown(e.check) < ends_shown(found.check) - std::min(shared, found.check.ends_pinned))
