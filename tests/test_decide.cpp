@@ -882,6 +882,27 @@ TEST(Decide, ATurnAboutItsLengthReplacesThePoseOnlyWhereItsEndsShowNoWorse) {
   EXPECT_FALSE(turn_may_replace(ends(1, 1), ends(0, 0)));  // the tube goes on beyond the turn's end
 }
 
+// Another part of the pipe in view is judged against a pose by its ends too: an end the pose pins
+// speaks for it, unless the other part's end lies there as well (shared), read by the same probes.
+// Seed 22's 11-S-asym of the zoo was handed out 491 mm off, its other bend on the bend in view: its
+// end in view pinned, the pipe's end there too, unpinned. A pinned pose's other part at both its
+// ends is that pose barely moved: a straight tube half out of the view lost 11 of 90 picks to such
+// "other parts" 2.7-10 mm away (seed 20's 01-straight).
+TEST(Decide, AnotherPartsEndsAreJudgedSharedEndsAside) {
+  const auto ends = [](int pinned, int continued) {
+    Verification v = seen(900, 0, 0);
+    v.ends_pinned = pinned, v.ends_continued = continued;
+    return v;
+  };
+  EXPECT_FALSE(other_part_ends_no_worse(ends(0, 0), ends(1, 0), 0));  // the pin speaks for the pose
+  EXPECT_TRUE(other_part_ends_no_worse(ends(0, 0), ends(1, 0), 1));   // the S above: a shared end
+  EXPECT_TRUE(other_part_ends_no_worse(ends(1, 0), ends(1, 0), 0));
+  EXPECT_FALSE(other_part_ends_no_worse(ends(0, 0), ends(2, 0), 1));  // its other end pinned too
+  EXPECT_FALSE(other_part_ends_no_worse(ends(1, 0), ends(1, 0), 2));  // the straight tube above
+  EXPECT_TRUE(other_part_ends_no_worse(ends(0, 0), ends(0, 0), 2));   // no pin: as before
+  EXPECT_FALSE(other_part_ends_no_worse(ends(0, 1), ends(0, 0), 2));  // the tube goes on beyond it
+}
+
 // Of a pipe that slides along itself, a pose its ends place goes before one they show slid where
 // the image confirms both about as well: the zoo's 31 mm coil (stereo, bin seed 1017, frame 1) had
 // its top coil found 211 mm round its helix, the tube going on beyond one end and no end pinned

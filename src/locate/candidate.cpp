@@ -313,6 +313,11 @@ bool turn_may_replace(const Verification& turned, const Verification& found) {
   return ends_shown(turned) >= ends_shown(found);
 }
 
+bool other_part_ends_no_worse(const Verification& other, const Verification& found, int shared) {
+  if (found.ends_pinned > 0 && shared == 2) return false;
+  return ends_shown(other) >= ends_shown(found) - std::min(shared, found.ends_pinned);
+}
+
 Decision decide(const Evidence& given, const LocateConfig& cfg) {
   Decision out;
   // Beyond the paper: of two poses the image confirms about as well (a near twin), the one whose
@@ -1139,12 +1144,10 @@ Hypotheses judge_hypotheses(const CandidateContext& ctx, const CandidateInput& i
           refine_and_check(other, found.ridge_cost_mm, buf->region_pts.data(), refine_count, true);
       if (pick_distance_mm(lm, e.model_to_bin, found.model_to_bin, ambiguity_mm) <= ambiguity_mm) continue;
       if (!as_good_where_read(e.check, found.check, cfg)) continue;
-      // An end both share pins neither more than the other; one at both ends of a pinned pose is
-      // the pose itself, moved less than the probes' reach.
-      const int shared = ends_shared(lm.centreline_points, lm.tube_d_mm, found.model_to_bin, e.model_to_bin);
-      if (found.check.ends_pinned > 0 && shared == 2) continue;
-      if (ends_shown(e.check) < ends_shown(found.check) - std::min(shared, found.check.ends_pinned))
-        continue;  // its ends show it worse
+      if (!other_part_ends_no_worse(
+              e.check, found.check,
+              ends_shared(lm.centreline_points, lm.tube_d_mm, found.model_to_bin, e.model_to_bin)))
+        continue;
       if (cfg.tell_rivals_apart) {
         const TellingPixels told = telling_pixels(found, e);
         if (pixels_show(told.for_a, told.for_b)) continue;  // the image shows the best, not the other

@@ -247,6 +247,11 @@ Decision decide(const Evidence& evidence, const LocateConfig& cfg);
 // seen better than the pose it came from, whose end the image shows (23-planar of the zoo: a pick
 // 330 mm off while clearing).
 bool turn_may_replace(const Verification& turned, const Verification& found);
+// judge_other_parts: whether another part of the pipe (`other`) shows its ends no worse than the
+// pose (`found`), `shared` of the pose's ends lying where the other's do (ends_shared): an end both
+// share pins neither more than the other. A pinned pose whose other part lies at both its ends is
+// that pose moved less than the probes' reach, not another placement: false.
+bool other_part_ends_no_worse(const Verification& other, const Verification& found, int shared);
 
 // R_th of Algorithm 2: ridge fits with a larger residual are not pursued.
 inline float residual_max_mm(const LocateConfig& cfg, float tube_d_mm) {
