@@ -452,11 +452,17 @@ int other_parts_in_view(const std::vector<Eigen::Vector3f>& centreline, float st
   return kept;
 }
 
+namespace {
+// The centreline's two ends under `pose`.
+std::array<Eigen::Vector3d, 2> ends_at(const std::vector<Eigen::Vector3f>& centreline, const Pose& pose) {
+  return {pose * centreline.front().cast<double>(), pose * centreline.back().cast<double>()};
+}
+}  // namespace
+
 bool ends_tell_apart(const std::vector<Eigen::Vector3f>& centreline, float d, const Pose& a, const Pose& b) {
   if (centreline.size() < 2) return true;
-  const auto at = [&](const Pose& pose, const Eigen::Vector3f& p) { return pose * p.cast<double>(); };
-  const Eigen::Vector3d a0 = at(a, centreline.front()), a1 = at(a, centreline.back());
-  const Eigen::Vector3d b0 = at(b, centreline.front()), b1 = at(b, centreline.back());
+  const auto [a0, a1] = ends_at(centreline, a);
+  const auto [b0, b1] = ends_at(centreline, b);
   const double paired = std::max((a0 - b0).norm(), (a1 - b1).norm());
   const double swapped = std::max((a0 - b1).norm(), (a1 - b0).norm());
   return std::min(paired, swapped) > double(kEndProbesOfD[0] * d);
@@ -464,14 +470,11 @@ bool ends_tell_apart(const std::vector<Eigen::Vector3f>& centreline, float d, co
 
 int ends_shared(const std::vector<Eigen::Vector3f>& centreline, float d, const Pose& a, const Pose& b) {
   if (centreline.size() < 2) return 0;
-  const std::array<Eigen::Vector3d, 2> ends_b = {b * centreline.front().cast<double>(),
-                                                 b * centreline.back().cast<double>()};
+  const std::array<Eigen::Vector3d, 2> ends_b = ends_at(centreline, b);
+  const double reach = double(kEndProbesOfD[0] * d);
   int shared = 0;
-  for (const Eigen::Vector3f& end : {centreline.front(), centreline.back()}) {
-    const Eigen::Vector3d p = a * end.cast<double>();
-    shared += (p - ends_b[0]).norm() <= double(kEndProbesOfD[0] * d) ||
-              (p - ends_b[1]).norm() <= double(kEndProbesOfD[0] * d);
-  }
+  for (const Eigen::Vector3d& p : ends_at(centreline, a))
+    shared += (p - ends_b[0]).norm() <= reach || (p - ends_b[1]).norm() <= reach;
   return shared;
 }
 
